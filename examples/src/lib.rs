@@ -1,0 +1,1 @@
+//! Example programs; the example scenes live in `examples/scenes/`.

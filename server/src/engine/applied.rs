@@ -1,0 +1,117 @@
+//! Applied-impulse stage: gravity, constant forces, joint torques, client
+//! impulses and the gyroscopic term, and the free velocity they give,
+//! `nu_free = nu + M^-1 p_app` with `p_app = h (F_ext + tau - w x J w)`.
+
+use super::model::{Attachment, Model};
+use super::state::State;
+use nalgebra::{Matrix3, Vector3};
+
+/// What the controllers (and the scene's constants) apply.
+///
+/// Joint torques are held until changed (a zero-order hold, as a controller
+/// expects of a torque command); body impulses act on the next step only.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Inputs {
+    /// Per joint: `+torque` on body_b, `-torque` on body_a (N m).
+    pub joint_torque: Vec<Vector3<f64>>,
+    /// Per body: linear and angular impulse (N s, N m s), world frame.
+    pub body_impulse: Vec<(Vector3<f64>, Vector3<f64>)>,
+}
+
+impl Inputs {
+    pub fn new(model: &Model) -> Inputs {
+        Inputs {
+            joint_torque: model.joints.iter().map(|j| j.torque).collect(),
+            body_impulse: vec![(Vector3::zeros(), Vector3::zeros()); model.bodies.len()],
+        }
+    }
+
+    /// Forgets the one-step impulses once a step has used them.
+    pub fn clear_impulses(&mut self) {
+        for imp in &mut self.body_impulse {
+            *imp = (Vector3::zeros(), Vector3::zeros());
+        }
+    }
+}
+
+/// A bad input, refused before it reaches the step.
+#[derive(Debug, Clone, PartialEq)]
+pub enum InputError {
+    UnknownJoint { index: usize, joints: usize },
+    UnknownBody { index: usize, bodies: usize },
+    NonFinite { what: &'static str, index: usize },
+}
+
+impl std::fmt::Display for InputError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            InputError::UnknownJoint { index, joints } => {
+                write!(f, "unknown joint index {index} (the scene has {joints})")
+            }
+            InputError::UnknownBody { index, bodies } => {
+                write!(f, "unknown body index {index} (the scene has {bodies})")
+            }
+            InputError::NonFinite { what, index } => {
+                write!(f, "{what} {index} is not finite (NaN or infinite)")
+            }
+        }
+    }
+}
+
+impl std::error::Error for InputError {}
+
+/// Per-body inverse mass in the world frame: `M_i^-1 = diag(1/m, R J^-1 R^T)`.
+#[derive(Debug, Clone, Copy)]
+pub struct InvMass {
+    pub inv_m: f64,
+    pub inv_i: Matrix3<f64>,
+}
+
+/// World-frame inverse masses of all bodies, for this step's orientations.
+pub fn inverse_masses(model: &Model, state: &State, out: &mut Vec<InvMass>) {
+    out.clear();
+    for (b, s) in model.bodies.iter().zip(&state.bodies) {
+        let r = s.q.to_rotation_matrix();
+        out.push(InvMass {
+            inv_m: b.inv_mass,
+            inv_i: r.matrix() * b.inv_inertia * r.matrix().transpose(),
+        });
+    }
+}
+
+/// `nu_free = nu + M^-1 p_app`, laid out `[v_0, w_0, v_1, w_1, ...]`.
+pub fn free_velocity(
+    model: &Model,
+    state: &State,
+    inputs: &Inputs,
+    minv: &[InvMass],
+    nu_free: &mut Vec<f64>,
+) {
+    let h = model.params.h;
+    nu_free.clear();
+    nu_free.resize(6 * model.bodies.len(), 0.0);
+    for (i, (b, s)) in model.bodies.iter().zip(&state.bodies).enumerate() {
+        let (imp_lin, imp_ang) = inputs.body_impulse[i];
+        let p_lin = h * (model.params.gravity * b.mass + b.force) + imp_lin;
+        // Gyroscopic term w x J w with the world-frame inertia (zero for a
+        // sphere, kept so that another shape needs no change here).
+        let r = s.q.to_rotation_matrix();
+        let j_world = r.matrix() * b.inertia * r.matrix().transpose();
+        let p_ang = -h * s.w.cross(&(j_world * s.w)) + imp_ang;
+        let v = s.v + p_lin * minv[i].inv_m;
+        let w = s.w + minv[i].inv_i * p_ang;
+        nu_free[6 * i..6 * i + 3].copy_from_slice(v.as_slice());
+        nu_free[6 * i + 3..6 * i + 6].copy_from_slice(w.as_slice());
+    }
+    for (joint, tau) in model.joints.iter().zip(&inputs.joint_torque) {
+        let ang = tau * h;
+        for (att, sign) in [(joint.b, 1.0), (joint.a, -1.0)] {
+            if let Attachment::Body(i) = att {
+                let dw = minv[i].inv_i * ang * sign;
+                for k in 0..3 {
+                    nu_free[6 * i + 3 + k] += dw[k];
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,105 @@
+//! Contact-set stage: coefficients, start-of-step normal speed and the
+//! friction basis of every potential contact.
+
+use super::collision::{Counterpart, Geometry};
+use super::model::{mix_friction, mix_restitution, Model};
+use super::state::{BodyState, State};
+use nalgebra::Vector3;
+
+/// Tangential speed (m/s) above which a contact counts as sliding at the start
+/// of the step, and its friction basis is aligned with the slip.
+pub const SLIDING_SPEED: f64 = 1e-9;
+
+#[derive(Debug, Clone, Copy)]
+pub struct Contact {
+    /// Index in the canonical enumeration of potential contacts.
+    pub id: usize,
+    pub geom: Geometry,
+    pub mu: f64,
+    pub e: f64,
+    /// Tangent basis: the friction directions are
+    /// `d_j = cos(2 pi j / n_d) t1 + sin(2 pi j / n_d) t2`.
+    pub t1: Vector3<f64>,
+    pub t2: Vector3<f64>,
+    /// Normal relative velocity at the start of the step (< 0: approaching).
+    pub v_n: f64,
+    /// Whether the contact has rows in this step's LCP.
+    pub in_lcp: bool,
+}
+
+impl Contact {
+    /// Friction direction `j` of `n_d`.
+    pub fn direction(&self, j: usize, nd: usize) -> Vector3<f64> {
+        let angle = std::f64::consts::TAU * j as f64 / nd as f64;
+        self.t1 * angle.cos() + self.t2 * angle.sin()
+    }
+
+    pub fn has_friction(&self) -> bool {
+        self.mu > 0.0
+    }
+}
+
+/// Velocity of the material point at lever arm `r` of a body.
+pub fn point_velocity(b: &BodyState, r: &Vector3<f64>) -> Vector3<f64> {
+    b.v + b.w.cross(r)
+}
+
+/// Relative velocity of A's contact point against B's.
+pub fn relative_velocity(state: &State, g: &Geometry) -> Vector3<f64> {
+    let va = point_velocity(&state.bodies[g.a], &g.r_a);
+    let vb = match g.b {
+        Counterpart::Plane(_) => Vector3::zeros(),
+        Counterpart::Body(j) => point_velocity(&state.bodies[j], &g.r_b),
+    };
+    va - vb
+}
+
+/// A unit vector perpendicular to `n`, chosen deterministically.
+pub fn perpendicular(n: &Vector3<f64>) -> Vector3<f64> {
+    // Cross with the axis least aligned with n: never near-parallel.
+    let a = n.abs();
+    let axis = if a.x <= a.y && a.x <= a.z {
+        Vector3::x()
+    } else if a.y <= a.z {
+        Vector3::y()
+    } else {
+        Vector3::z()
+    };
+    n.cross(&axis).normalize()
+}
+
+/// Builds the contact set from the geometry of every potential contact.
+pub fn build(model: &Model, state: &State, geoms: &[Geometry], out: &mut Vec<Contact>) {
+    out.clear();
+    for (id, g) in geoms.iter().enumerate() {
+        let a = &model.bodies[g.a];
+        let (mu_b, e_b) = match g.b {
+            Counterpart::Plane(p) => (model.planes[p].friction, model.planes[p].restitution),
+            Counterpart::Body(j) => (model.bodies[j].friction, model.bodies[j].restitution),
+        };
+        let v_rel = relative_velocity(state, g);
+        let v_n = v_rel.dot(&g.normal);
+        let v_t = v_rel - g.normal * v_n;
+        let slip = v_t.norm();
+        // A sliding contact gets t1 along its slip, so that d_0 and (for even
+        // n_d) d_{n_d/2} = -t1 lie exactly along and against it: the friction
+        // impulse then opposes the slip exactly, where a fixed basis would let
+        // the polyhedral cone steer the body sideways.
+        let t1 = if slip > SLIDING_SPEED {
+            v_t / slip
+        } else {
+            perpendicular(&g.normal)
+        };
+        let t2 = g.normal.cross(&t1);
+        out.push(Contact {
+            id,
+            geom: *g,
+            mu: mix_friction(a.friction, mu_b),
+            e: mix_restitution(a.restitution, e_b),
+            t1,
+            t2,
+            v_n,
+            in_lcp: false,
+        });
+    }
+}

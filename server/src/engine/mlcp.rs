@@ -1,0 +1,360 @@
+//! mLCP stage: the mixed LCP of one step, reduced to a pure LCP by the Schur
+//! complement of the joint block, and the recovery of velocities and joint
+//! impulses from its solution (formulation.md, "To a pure LCP").
+//!
+//! Derivation, with `G_c = [G_n, G_f]` the contact rows and
+//! `lambda = [p_n; p_f]`. The first block row of the mLCP gives
+//! `nu' = nu_free + M^-1 (G_b p_b + G_c lambda)`. Substituted into the joint
+//! rows `G_b^T nu' + beta psi_b / h = 0`:
+//!
+//! ```text
+//! A_bb p_b = -(b_b + A_bc lambda),  A_xy = G_x^T M^-1 G_y,
+//!                                   b_b = G_b^T nu_free + beta psi_b / h
+//! ```
+//!
+//! `A_bb` is SPD when the joints are independent; with `A_bb = L L^T`,
+//! `Y = L^-1 A_bc` and `y_b = L^-1 b_b` the contact velocities are
+//!
+//! ```text
+//! G_c^T nu' = (A_cc - Y^T Y) lambda + (G_c^T nu_free - Y^T y_b)
+//!           =  W lambda + b
+//! ```
+//!
+//! which is `F - B D^-1 C` and `a - B D^-1 c` of the notes without ever
+//! forming `D^-1`: the mass matrix is block diagonal, so only the small SPD
+//! block `G_b^T M^-1 G_b` is factored. The pure LCP in `x = [p_n; p_f; s]`:
+//!
+//! ```text
+//! [ W_nn  W_nf  0 ] [p_n]   [b_n + a_n]
+//! [ W_fn  W_ff  E ] [p_f] + [b_f      ]   >= 0  _|_  x >= 0
+//! [ U    -E^T   0 ] [s  ]   [0        ]
+//! ```
+//!
+//! with `a_n` the gap (stabilisation, restitution) term of each normal row.
+
+use super::applied::InvMass;
+use super::contact::Contact;
+use super::model::{Attachment, Model, Params};
+use super::rows::Row;
+use super::state::State;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::{
+    cholesky_in_place, cholesky_in_place_scratch, LltRegularization,
+};
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+};
+use faer::{MatMut, MatRef, Par};
+use nalgebra::Vector3;
+
+/// A Cholesky pivot below this fraction of the block's largest diagonal
+/// entry means dependent joint rows (redundant joints or a closed loop).
+const SINGULAR_PIVOT: f64 = 1e-12;
+
+/// Why the reduction failed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MlcpError {
+    /// `G_b^T M^-1 G_b` is singular: the joint rows are dependent.
+    SingularJointBlock { row: usize, pivot: f64 },
+}
+
+impl std::fmt::Display for MlcpError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MlcpError::SingularJointBlock { row, pivot } => write!(
+                f,
+                "singular joint block: pivot {pivot:.3e} at joint row {row} (redundant joints or a closed loop)"
+            ),
+        }
+    }
+}
+
+/// World position of a joint's anchor on one side, and its lever arm.
+pub fn anchor(
+    att: Attachment,
+    local: &Vector3<f64>,
+    state: &State,
+) -> (Vector3<f64>, Option<(usize, Vector3<f64>)>) {
+    match att {
+        Attachment::World => (*local, None),
+        Attachment::Body(i) => {
+            let b = &state.bodies[i];
+            let r = b.q.transform_vector(local);
+            (b.x + r, Some((i, r)))
+        }
+    }
+}
+
+/// The constant term `a_n` of a normal row, so that the row reads
+/// `G_n^T nu' + a_n >= 0`.
+///
+/// - Separated (`psi >= 0`): `psi / h`, the body may close the gap exactly.
+/// - Penetrating: `beta psi / h` removes the fraction `beta` of it.
+/// - Restitution: a contact approaching faster than `v_min` whose free motion
+///   would close it within the step asks for `v_n' >= -e v_n^-`, i.e.
+///   `a_n = e v_n^-`; the stricter of that and the gap term wins. A contact
+///   that the free motion does not close gets no bounce, or a ball would
+///   bounce off thin air at the pruning margin.
+pub fn normal_offset(c: &Contact, v_n_free: f64, p: &Params) -> f64 {
+    let psi = c.geom.gap;
+    let gap_term = if psi >= 0.0 {
+        psi / p.h
+    } else {
+        p.beta * psi / p.h
+    };
+    let closes = psi + p.h * v_n_free < 0.0;
+    if c.e > 0.0 && c.v_n < -p.restitution_threshold && closes {
+        gap_term.min(c.e * c.v_n)
+    } else {
+        gap_term
+    }
+}
+
+/// The step's mLCP, its reduction and its scratch space.
+#[derive(Default)]
+pub struct Mlcp {
+    /// Rows: joints (3 each), then normal rows, then friction rows.
+    pub rows: Vec<Row>,
+    /// Joint rows.
+    pub nb: usize,
+    /// Contacts in the LCP, and how many of them have friction.
+    pub nc: usize,
+    pub nf: usize,
+    pub nd: usize,
+    /// Normal row `i` belongs to `contacts[lcp_contacts[i]]`.
+    pub lcp_contacts: Vec<usize>,
+    /// Friction block `f` belongs to normal row `friction_of[f]`.
+    pub friction_of: Vec<usize>,
+    /// `G^T nu_free` per row (plus `beta psi_b / h` on joint rows).
+    b: Vec<f64>,
+    /// Delassus matrix of all rows, row-major.
+    w: Vec<f64>,
+    /// `A_bb`, then its Cholesky factor (lower triangle), column-major.
+    chol: Vec<f64>,
+    /// `Y = L^-1 A_bc`, column-major `nb x m`, and `y_b = L^-1 b_b`.
+    y: Vec<f64>,
+    yb: Vec<f64>,
+    mem: Option<(usize, MemBuffer)>,
+    /// The pure LCP: `lcp_m` row-major `n x n`, `lcp_q`, and its solution.
+    pub lcp_m: Vec<f64>,
+    pub lcp_q: Vec<f64>,
+    pub z: Vec<f64>,
+    /// Joint impulses (3 per joint, on body A).
+    pub p_b: Vec<f64>,
+}
+
+impl Mlcp {
+    /// Contact rows (normal and friction): `m`.
+    pub fn contact_rows(&self) -> usize {
+        self.nc + self.nf * self.nd
+    }
+
+    /// Unknowns of the pure LCP: `n = nc + nf (n_d + 1)`.
+    pub fn lcp_size(&self) -> usize {
+        self.contact_rows() + self.nf
+    }
+
+    /// Builds the rows, the Delassus matrix and the reduced LCP for the
+    /// contacts marked `in_lcp`.
+    pub fn build(
+        &mut self,
+        model: &Model,
+        state: &State,
+        contacts: &[Contact],
+        minv: &[InvMass],
+        nu_free: &[f64],
+    ) -> Result<(), MlcpError> {
+        let p = &model.params;
+        let nd = p.friction_directions;
+        self.rows.clear();
+        self.b.clear();
+        self.lcp_contacts.clear();
+        self.friction_of.clear();
+
+        // Joint rows: psi_b = x_A + R_A a_A - x_B - R_B a_B, one row per axis.
+        for joint in &model.joints {
+            let (pa, ra) = anchor(joint.a, &joint.local_a, state);
+            let (pb, rb) = anchor(joint.b, &joint.local_b, state);
+            let psi = pa - pb;
+            for k in 0..3 {
+                let row = Row::along(Vector3::ith(k, 1.0), ra, rb);
+                self.b.push(row.velocity(nu_free) + p.beta * psi[k] / p.h);
+                self.rows.push(row);
+            }
+        }
+        self.nb = self.rows.len();
+
+        // Normal rows, then friction rows where mu > 0.
+        for (ci, c) in contacts.iter().enumerate().filter(|(_, c)| c.in_lcp) {
+            let row = Row::contact(c, c.geom.normal);
+            self.b.push(row.velocity(nu_free));
+            self.rows.push(row);
+            self.lcp_contacts.push(ci);
+        }
+        self.nc = self.lcp_contacts.len();
+        for i in 0..self.nc {
+            let c = &contacts[self.lcp_contacts[i]];
+            if c.has_friction() {
+                for j in 0..nd {
+                    let row = Row::contact(c, c.direction(j, nd));
+                    self.b.push(row.velocity(nu_free));
+                    self.rows.push(row);
+                }
+                self.friction_of.push(i);
+            }
+        }
+        self.nf = self.friction_of.len();
+        self.nd = nd;
+
+        // Delassus matrix W = G^T M^-1 G (symmetric).
+        let r = self.rows.len();
+        self.w.clear();
+        self.w.resize(r * r, 0.0);
+        for k in 0..r {
+            for l in k..r {
+                let v = self.rows[k].coupling(&self.rows[l], minv);
+                self.w[k * r + l] = v;
+                self.w[l * r + k] = v;
+            }
+        }
+
+        self.reduce_joints()?;
+        self.form_lcp(contacts, p);
+        Ok(())
+    }
+
+    /// Factors `A_bb` and forms `Y = L^-1 A_bc`, `y_b = L^-1 b_b`.
+    fn reduce_joints(&mut self) -> Result<(), MlcpError> {
+        let (nb, r) = (self.nb, self.rows.len());
+        let m = r - nb;
+        self.chol.clear();
+        self.y.clear();
+        self.yb.clear();
+        if nb == 0 {
+            return Ok(());
+        }
+        for j in 0..nb {
+            for i in 0..nb {
+                self.chol.push(self.w[i * r + j]);
+            }
+        }
+        for j in 0..m {
+            for i in 0..nb {
+                self.y.push(self.w[i * r + nb + j]);
+            }
+        }
+        self.yb.extend_from_slice(&self.b[..nb]);
+        let max_diag = (0..nb).fold(0.0f64, |a, i| a.max(self.chol[i * nb + i]));
+
+        if self.mem.as_ref().is_none_or(|(cap, _)| *cap < nb) {
+            let req = cholesky_in_place_scratch::<f64>(nb, Par::Seq, Default::default());
+            self.mem = Some((nb, MemBuffer::new(req)));
+        }
+        let Some((_, mem)) = self.mem.as_mut() else {
+            unreachable!("scratch allocated above")
+        };
+        let stack = MemStack::new(mem);
+        let a = MatMut::from_column_major_slice_mut(&mut self.chol, nb, nb);
+        if let Err(e) = cholesky_in_place(
+            a,
+            LltRegularization::default(),
+            Par::Seq,
+            stack,
+            Default::default(),
+        ) {
+            let faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } = e;
+            return Err(MlcpError::SingularJointBlock {
+                row: index,
+                pivot: 0.0,
+            });
+        }
+        for i in 0..nb {
+            let d = self.chol[i * nb + i];
+            if d * d < SINGULAR_PIVOT * max_diag {
+                return Err(MlcpError::SingularJointBlock {
+                    row: i,
+                    pivot: d * d,
+                });
+            }
+        }
+        let l = MatRef::from_column_major_slice(&self.chol, nb, nb);
+        if m > 0 {
+            solve_lower_triangular_in_place(
+                l,
+                MatMut::from_column_major_slice_mut(&mut self.y, nb, m),
+                Par::Seq,
+            );
+        }
+        solve_lower_triangular_in_place(
+            l,
+            MatMut::from_column_major_slice_mut(&mut self.yb, nb, 1),
+            Par::Seq,
+        );
+        Ok(())
+    }
+
+    /// Forms the pure LCP from `W - Y^T Y` and `b - Y^T y_b`.
+    fn form_lcp(&mut self, contacts: &[Contact], p: &Params) {
+        let (nb, r) = (self.nb, self.rows.len());
+        let m = r - nb;
+        let n = self.lcp_size();
+        self.lcp_m.clear();
+        self.lcp_m.resize(n * n, 0.0);
+        self.lcp_q.clear();
+        self.lcp_q.resize(n, 0.0);
+        for i in 0..m {
+            let yi = &self.y[i * nb..(i + 1) * nb];
+            for j in 0..m {
+                let yj = &self.y[j * nb..(j + 1) * nb];
+                let schur: f64 = yi.iter().zip(yj).map(|(a, b)| a * b).sum();
+                self.lcp_m[i * n + j] = self.w[(nb + i) * r + nb + j] - schur;
+            }
+            let schur: f64 = yi.iter().zip(&self.yb).map(|(a, b)| a * b).sum();
+            self.lcp_q[i] = self.b[nb + i] - schur;
+        }
+        // Gap terms: the free normal velocity includes the joints' response.
+        for i in 0..self.nc {
+            let c = &contacts[self.lcp_contacts[i]];
+            self.lcp_q[i] += normal_offset(c, self.lcp_q[i], p);
+        }
+        // E and its transpose, U: friction rows of contact f sit at
+        // nc + f nd ..; its slack s_f at m + f.
+        for (f, &i) in self.friction_of.iter().enumerate() {
+            let c = &contacts[self.lcp_contacts[i]];
+            let s = m + f;
+            for j in 0..self.nd {
+                let row = self.nc + f * self.nd + j;
+                self.lcp_m[row * n + s] = 1.0;
+                self.lcp_m[s * n + row] = -1.0;
+            }
+            self.lcp_m[s * n + i] = c.mu;
+        }
+    }
+
+    /// From the LCP solution in `self.z`: joint impulses
+    /// `p_b = -L^-T (y_b + Y lambda)` and `nu' = nu_free + M^-1 G [p_b; lambda]`.
+    pub fn recover(&mut self, minv: &[InvMass], nu_free: &[f64], nu: &mut Vec<f64>) {
+        let (nb, m) = (self.nb, self.contact_rows());
+        self.p_b.clear();
+        if nb > 0 {
+            for k in 0..nb {
+                let yk: f64 = (0..m).map(|j| self.y[j * nb + k] * self.z[j]).sum();
+                self.p_b.push(-(self.yb[k] + yk));
+            }
+            let l = MatRef::from_column_major_slice(&self.chol, nb, nb);
+            solve_upper_triangular_in_place(
+                l.transpose(),
+                MatMut::from_column_major_slice_mut(&mut self.p_b, nb, 1),
+                Par::Seq,
+            );
+        }
+        nu.clear();
+        nu.extend_from_slice(nu_free);
+        for (k, row) in self.rows.iter().enumerate() {
+            let impulse = if k < nb { self.p_b[k] } else { self.z[k - nb] };
+            if impulse != 0.0 {
+                row.apply(impulse, minv, nu);
+            }
+        }
+    }
+}

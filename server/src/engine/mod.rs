@@ -1,0 +1,384 @@
+//! The physics engine: a pure library. No files, no sockets, no iceoryx2;
+//! bad numbers are reported in the [`StepReport`], never panicked on.
+//!
+//! One step (formulation.md) is split around the control input, as MuJoCo's
+//! `mj_step1`/`mj_step2`:
+//!
+//! - [`Engine::prepare`]: collision, contact set, inverse masses: everything
+//!   that does not depend on the controllers' inputs;
+//! - [`Engine::finish`]: applied impulses, pruning, mLCP, solver, recovery,
+//!   position update, measurements.
+//!
+//! [`Engine::step`] is both. Each stage is a file of its own.
+
+pub mod applied;
+pub mod collision;
+pub mod contact;
+pub mod integrate;
+pub mod measure;
+pub mod mlcp;
+pub mod model;
+pub mod prune;
+pub mod report;
+pub mod rows;
+pub mod solver;
+pub mod state;
+
+pub use applied::{InputError, Inputs};
+pub use model::{Attachment, Model};
+pub use report::{StepError, StepReport, Timings};
+pub use state::{BodyState, State};
+
+use applied::InvMass;
+use collision::{Counterpart, Geometry};
+use contact::Contact;
+use mlcp::Mlcp;
+use nalgebra::Vector3;
+use solver::{Lcp, Lemke};
+use std::time::Instant;
+
+/// What an impulse row of the output describes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImpulseKind {
+    Normal,
+    Friction,
+    Joint,
+}
+
+/// One side of an impulse: a body, a plane or the world.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Party {
+    World,
+    Body(usize),
+    Plane(usize),
+}
+
+/// The world-frame impulse on `a` over the step; `b` receives the opposite.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImpulseRecord {
+    pub kind: ImpulseKind,
+    /// Contact id (canonical index) or joint index.
+    pub index: usize,
+    pub a: Party,
+    pub b: Party,
+    pub impulse: Vector3<f64>,
+}
+
+/// Scratch space reused from step to step: after the largest problem has
+/// been seen once, a step allocates nothing.
+#[derive(Default)]
+struct Workspace {
+    geoms: Vec<Geometry>,
+    contacts: Vec<Contact>,
+    minv: Vec<InvMass>,
+    nu_free: Vec<f64>,
+    nu: Vec<f64>,
+    mlcp: Mlcp,
+    impulses: Vec<ImpulseRecord>,
+    measure: Vec<Geometry>,
+}
+
+pub struct Engine {
+    model: Model,
+    state: State,
+    inputs: Inputs,
+    ws: Workspace,
+    lemke: Lemke,
+    prepared: bool,
+    collision_time: f64,
+}
+
+impl Engine {
+    pub fn new(model: Model) -> Engine {
+        let state = State::initial(&model);
+        let inputs = Inputs::new(&model);
+        Engine {
+            model,
+            state,
+            inputs,
+            ws: Workspace::default(),
+            lemke: Lemke::new(),
+            prepared: false,
+            collision_time: 0.0,
+        }
+    }
+
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    pub fn state(&self) -> &State {
+        &self.state
+    }
+
+    /// Restores a state (a snapshot taken with `state().clone()`).
+    pub fn set_state(&mut self, state: State) {
+        self.state = state;
+        self.prepared = false;
+    }
+
+    pub fn inputs(&self) -> &Inputs {
+        &self.inputs
+    }
+
+    /// Sets the held torque of joint `joint` (N m): `+torque` on body_b,
+    /// `-torque` on body_a, until changed.
+    pub fn set_joint_torque(
+        &mut self,
+        joint: usize,
+        torque: Vector3<f64>,
+    ) -> Result<(), InputError> {
+        let joints = self.model.joints.len();
+        if joint >= joints {
+            return Err(InputError::UnknownJoint {
+                index: joint,
+                joints,
+            });
+        }
+        if !torque.iter().all(|x| x.is_finite()) {
+            return Err(InputError::NonFinite {
+                what: "torque of joint",
+                index: joint,
+            });
+        }
+        self.inputs.joint_torque[joint] = torque;
+        Ok(())
+    }
+
+    /// Adds a world-frame impulse (N s) and angular impulse (N m s) to body
+    /// `body` for the next step only.
+    pub fn add_body_impulse(
+        &mut self,
+        body: usize,
+        linear: Vector3<f64>,
+        angular: Vector3<f64>,
+    ) -> Result<(), InputError> {
+        let bodies = self.model.bodies.len();
+        if body >= bodies {
+            return Err(InputError::UnknownBody {
+                index: body,
+                bodies,
+            });
+        }
+        if !(linear.iter().chain(angular.iter()).all(|x| x.is_finite())) {
+            return Err(InputError::NonFinite {
+                what: "impulse on body",
+                index: body,
+            });
+        }
+        let imp = &mut self.inputs.body_impulse[body];
+        imp.0 += linear;
+        imp.1 += angular;
+        Ok(())
+    }
+
+    /// The impulses of the last step (normal, friction, joint).
+    pub fn impulses(&self) -> &[ImpulseRecord] {
+        &self.ws.impulses
+    }
+
+    /// The contact set of the last step, every potential contact included.
+    pub fn contacts(&self) -> &[Contact] {
+        &self.ws.contacts
+    }
+
+    /// The last step's pure LCP `(n, M row-major, q)`, for tests and tools.
+    pub fn last_lcp(&self) -> (usize, &[f64], &[f64]) {
+        let m = &self.ws.mlcp;
+        (m.lcp_size(), &m.lcp_m, &m.lcp_q)
+    }
+
+    /// One whole step.
+    pub fn step(&mut self) -> StepReport {
+        self.prepare();
+        self.finish()
+    }
+
+    /// The part of the step that needs no input: collision, contact set,
+    /// inverse masses. Idempotent until the state changes.
+    pub fn prepare(&mut self) {
+        if self.prepared {
+            return;
+        }
+        let _span = tracing::trace_span!("collision").entered();
+        let t0 = Instant::now();
+        let ws = &mut self.ws;
+        collision::detect(&self.model, &self.state, &mut ws.geoms);
+        contact::build(&self.model, &self.state, &ws.geoms, &mut ws.contacts);
+        applied::inverse_masses(&self.model, &self.state, &mut ws.minv);
+        self.collision_time = t0.elapsed().as_secs_f64();
+        self.prepared = true;
+    }
+
+    /// The rest of the step, with the inputs as they are now. On failure the
+    /// state is left unchanged and the report says why.
+    pub fn finish(&mut self) -> StepReport {
+        self.prepare();
+        let start = Instant::now();
+        let mut timings = Timings {
+            collision: self.collision_time,
+            ..Timings::default()
+        };
+        let p = &self.model.params;
+        let mut report = StepReport {
+            step: self.state.step + 1,
+            t: (self.state.step + 1) as f64 * p.h,
+            solver: p.solver.as_str(),
+            error: None,
+            pivots: 0,
+            residual: 0.0,
+            lcp_size: 0,
+            contacts_in_lcp: 0,
+            active_contacts: 0,
+            resolves: 0,
+            max_penetration: 0.0,
+            max_joint_error: 0.0,
+            energy: Default::default(),
+            timings,
+        };
+
+        let solved = self.solve(&mut report, &mut timings);
+        self.inputs.clear_impulses();
+        if let Err(e) = solved {
+            report.error = Some(e);
+            self.ws.impulses.clear();
+            self.prepared = true; // the state did not change
+            report.step = self.state.step;
+            report.t = self.state.t;
+            return self.measure(report, timings, start);
+        }
+
+        let t0 = Instant::now();
+        {
+            let _span = tracing::trace_span!("integrate").entered();
+            integrate::positions(&mut self.state, &self.ws.nu, self.model.params.h);
+            self.state.step += 1;
+            self.state.t = self.state.step as f64 * self.model.params.h;
+            self.prepared = false;
+        }
+        timings.integrate = t0.elapsed().as_secs_f64();
+        self.record_impulses();
+        report.active_contacts = self
+            .ws
+            .impulses
+            .iter()
+            .filter(|r| r.kind == ImpulseKind::Normal)
+            .count();
+        self.measure(report, timings, start)
+    }
+
+    /// Applied impulses, pruning, mLCP, solver and recovery, repeated while
+    /// the velocity check adds left-out contacts. Leaves `nu'` in `ws.nu`.
+    fn solve(&mut self, report: &mut StepReport, timings: &mut Timings) -> Result<(), StepError> {
+        let model = &self.model;
+        let ws = &mut self.ws;
+        let t0 = Instant::now();
+        applied::free_velocity(model, &self.state, &self.inputs, &ws.minv, &mut ws.nu_free);
+        prune::select(&mut ws.contacts, &self.state, &ws.nu_free, &model.params);
+        timings.assemble += t0.elapsed().as_secs_f64();
+        loop {
+            let t0 = Instant::now();
+            {
+                let _span = tracing::trace_span!("assemble").entered();
+                ws.mlcp
+                    .build(model, &self.state, &ws.contacts, &ws.minv, &ws.nu_free)
+                    .map_err(StepError::Mlcp)?;
+            }
+            let t1 = Instant::now();
+            timings.assemble += (t1 - t0).as_secs_f64();
+            {
+                let _span = tracing::trace_span!("solve").entered();
+                let m = &mut ws.mlcp;
+                let n = m.lcp_size();
+                m.z.clear();
+                m.z.resize(n, 0.0);
+                let lcp = Lcp {
+                    n,
+                    m: &m.lcp_m,
+                    q: &m.lcp_q,
+                };
+                let info = self.lemke.solve(&lcp, &mut m.z).map_err(StepError::Lemke)?;
+                report.pivots += info.work;
+                report.residual = report.residual.max(info.residual);
+                report.lcp_size = n;
+                report.contacts_in_lcp = m.nc;
+                m.recover(&ws.minv, &ws.nu_free, &mut ws.nu);
+            }
+            timings.solve += t1.elapsed().as_secs_f64();
+            if !ws.nu.iter().all(|x| x.is_finite()) {
+                return Err(StepError::NonFinite);
+            }
+            let added = prune::check_left_out(&mut ws.contacts, &ws.nu, model.params.h);
+            if added == 0 {
+                return Ok(());
+            }
+            report.resolves += 1;
+        }
+    }
+
+    /// The step's impulses as records, from the solved mLCP.
+    fn record_impulses(&mut self) {
+        let ws = &mut self.ws;
+        let m = &ws.mlcp;
+        ws.impulses.clear();
+        for (j, joint) in self.model.joints.iter().enumerate() {
+            let p = Vector3::new(m.p_b[3 * j], m.p_b[3 * j + 1], m.p_b[3 * j + 2]);
+            let party = |a: Attachment| match a {
+                Attachment::World => Party::World,
+                Attachment::Body(i) => Party::Body(i),
+            };
+            ws.impulses.push(ImpulseRecord {
+                kind: ImpulseKind::Joint,
+                index: j,
+                a: party(joint.a),
+                b: party(joint.b),
+                impulse: p,
+            });
+        }
+        let nd = m.nd;
+        let mut friction = m.friction_of.iter().enumerate().peekable();
+        for (i, &ci) in m.lcp_contacts.iter().enumerate() {
+            let c = &ws.contacts[ci];
+            let b = match c.geom.b {
+                Counterpart::Plane(p) => Party::Plane(p),
+                Counterpart::Body(j) => Party::Body(j),
+            };
+            let record = |kind, impulse| ImpulseRecord {
+                kind,
+                index: c.id,
+                a: Party::Body(c.geom.a),
+                b,
+                impulse,
+            };
+            if m.z[i] > 0.0 {
+                ws.impulses
+                    .push(record(ImpulseKind::Normal, c.geom.normal * m.z[i]));
+            }
+            if let Some((f, _)) = friction.next_if(|(_, &row)| row == i) {
+                let base = m.nc + f * nd;
+                let p: Vector3<f64> = (0..nd).map(|j| c.direction(j, nd) * m.z[base + j]).sum();
+                if p != Vector3::zeros() {
+                    ws.impulses.push(record(ImpulseKind::Friction, p));
+                }
+            }
+        }
+    }
+
+    fn measure(
+        &mut self,
+        mut report: StepReport,
+        mut timings: Timings,
+        start: Instant,
+    ) -> StepReport {
+        let t0 = Instant::now();
+        let _span = tracing::trace_span!("measure").entered();
+        report.energy = measure::energy(&self.model, &self.state);
+        report.max_penetration =
+            measure::max_penetration(&self.model, &self.state, &mut self.ws.measure);
+        report.max_joint_error = measure::max_joint_error(&self.model, &self.state);
+        timings.measure = t0.elapsed().as_secs_f64();
+        timings.total = timings.collision + start.elapsed().as_secs_f64();
+        report.timings = timings;
+        report
+    }
+}

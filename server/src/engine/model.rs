@@ -1,0 +1,221 @@
+//! The compiled scene: immutable while the simulation runs (MuJoCo's
+//! `mjModel`). Everything that changes lives in [`State`](super::State).
+
+use cosim_shared::{Scene, SolverChoice};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+
+/// A body's shape. Another shape is a new variant, an inertia function below
+/// and a file per shape pair under `collision/`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shape {
+    Sphere { radius: f64 },
+}
+
+impl Shape {
+    /// Body-frame inertia about the centre of mass.
+    pub fn inertia(&self, mass: f64) -> Matrix3<f64> {
+        match *self {
+            // Solid sphere: J = 2/5 m R^2 I.
+            Shape::Sphere { radius } => Matrix3::identity() * (0.4 * mass * radius * radius),
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct Body {
+    pub name: String,
+    pub shape: Shape,
+    pub mass: f64,
+    pub inv_mass: f64,
+    /// Body-frame inertia and its inverse (diagonal for a sphere, so the
+    /// world-frame inverse is the same matrix).
+    pub inertia: Matrix3<f64>,
+    pub inv_inertia: Matrix3<f64>,
+    pub friction: f64,
+    pub restitution: f64,
+    /// Constant world-frame force besides gravity (N).
+    pub force: Vector3<f64>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Plane {
+    pub name: String,
+    /// Unit normal; bodies stay on this side.
+    pub normal: Vector3<f64>,
+    /// `normal . x = offset` on the plane.
+    pub offset: f64,
+    pub friction: f64,
+    pub restitution: f64,
+}
+
+/// One side of a joint: a body or the fixed world.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Attachment {
+    World,
+    Body(usize),
+}
+
+/// Pins a point fixed in body A to a point fixed in body B (or the world):
+/// `psi_b = x_A + R_A a_A - x_B - R_B a_B = 0`.
+#[derive(Debug, Clone)]
+pub struct SphericalJoint {
+    pub name: String,
+    pub a: Attachment,
+    pub b: Attachment,
+    /// Anchor in A's body frame (a world point when A is the world).
+    pub local_a: Vector3<f64>,
+    pub local_b: Vector3<f64>,
+    /// Constant joint torque from the scene: the initial held input.
+    pub torque: Vector3<f64>,
+}
+
+/// Time-stepping parameters.
+#[derive(Debug, Clone)]
+pub struct Params {
+    pub h: f64,
+    pub gravity: Vector3<f64>,
+    pub friction_directions: usize,
+    pub solver: SolverChoice,
+    pub beta: f64,
+    pub restitution_threshold: f64,
+    pub contact_margin: f64,
+    /// Keep every potential contact in the LCP (`--full`), as in the notes.
+    pub full: bool,
+}
+
+/// Initial pose and twist of a body, world frame.
+#[derive(Debug, Clone, Copy)]
+pub struct InitialBody {
+    pub position: Vector3<f64>,
+    pub orientation: UnitQuaternion<f64>,
+    pub velocity: Vector3<f64>,
+    pub angular_velocity: Vector3<f64>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Model {
+    pub name: String,
+    pub bodies: Vec<Body>,
+    pub planes: Vec<Plane>,
+    pub joints: Vec<SphericalJoint>,
+    pub params: Params,
+    pub initial: Vec<InitialBody>,
+}
+
+/// How contact coefficients combine (Box2D's rule): friction is the geometric
+/// mean, so a frictionless side makes the contact frictionless; restitution
+/// the larger, so one bouncy side makes the contact bounce.
+pub fn mix_friction(a: f64, b: f64) -> f64 {
+    (a * b).sqrt()
+}
+pub fn mix_restitution(a: f64, b: f64) -> f64 {
+    a.max(b)
+}
+
+impl Model {
+    /// Compiles a validated scene. Validation already refused every value
+    /// this could not handle, so nothing here can fail.
+    pub fn from_scene(scene: &Scene) -> Model {
+        let v3 = |a: [f64; 3]| Vector3::new(a[0], a[1], a[2]);
+        let bodies: Vec<Body> = scene
+            .bodies
+            .iter()
+            .map(|b| {
+                let shape = Shape::Sphere { radius: b.radius };
+                let inertia = shape.inertia(b.mass);
+                Body {
+                    name: b.name.clone(),
+                    shape,
+                    mass: b.mass,
+                    inv_mass: 1.0 / b.mass,
+                    inertia,
+                    inv_inertia: inertia.try_inverse().unwrap_or_else(Matrix3::zeros),
+                    friction: b.friction,
+                    restitution: b.restitution,
+                    force: v3(b.force),
+                }
+            })
+            .collect();
+        let initial: Vec<InitialBody> = scene
+            .bodies
+            .iter()
+            .map(|b| {
+                let [w, x, y, z] = b.orientation;
+                InitialBody {
+                    position: v3(b.position),
+                    orientation: UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                        w, x, y, z,
+                    )),
+                    velocity: v3(b.velocity),
+                    angular_velocity: v3(b.angular_velocity),
+                }
+            })
+            .collect();
+        let planes = scene
+            .planes
+            .iter()
+            .map(|p| {
+                let n = v3(p.normal).normalize();
+                Plane {
+                    name: p.name.clone(),
+                    normal: n,
+                    offset: n.dot(&v3(p.point)),
+                    friction: p.friction,
+                    restitution: p.restitution,
+                }
+            })
+            .collect();
+        let find = |name: &str| match scene.bodies.iter().position(|b| b.name == name) {
+            Some(i) => Attachment::Body(i),
+            None => Attachment::World,
+        };
+        // The anchor is a world point at t = 0; store it in each body's frame.
+        let local = |att: Attachment, anchor: Vector3<f64>| match att {
+            Attachment::World => anchor,
+            Attachment::Body(i) => initial[i]
+                .orientation
+                .inverse_transform_vector(&(anchor - initial[i].position)),
+        };
+        let joints = scene
+            .joints
+            .iter()
+            .map(|j| {
+                let (a, b) = (find(&j.body_a), find(&j.body_b));
+                let anchor = v3(j.anchor);
+                SphericalJoint {
+                    name: j.name.clone(),
+                    a,
+                    b,
+                    local_a: local(a, anchor),
+                    local_b: local(b, anchor),
+                    torque: v3(j.torque),
+                }
+            })
+            .collect();
+        let s = &scene.sim;
+        Model {
+            name: scene.name().to_string(),
+            bodies,
+            planes,
+            joints,
+            params: Params {
+                h: s.dt,
+                gravity: v3(s.gravity),
+                friction_directions: s.friction_directions,
+                solver: s.solver,
+                beta: s.beta,
+                restitution_threshold: s.restitution_threshold,
+                contact_margin: s.contact_margin,
+                full: false,
+            },
+            initial,
+        }
+    }
+
+    /// Number of potential contacts: every sphere against every plane and
+    /// every other sphere (7 in the reference scene).
+    pub fn potential_contacts(&self) -> usize {
+        let n = self.bodies.len();
+        n * self.planes.len() + n * n.saturating_sub(1) / 2
+    }
+}

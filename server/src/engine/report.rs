@@ -1,0 +1,84 @@
+//! The step report: what every step says about itself.
+
+use super::measure::Energy;
+use super::mlcp::MlcpError;
+use super::solver::LemkeError;
+
+/// Why a step failed. The state is left as it was before the step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StepError {
+    Lemke(LemkeError),
+    Mlcp(MlcpError),
+    /// The new velocities are not finite (an input or the scene overflowed).
+    NonFinite,
+}
+
+impl std::fmt::Display for StepError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StepError::Lemke(e) => write!(f, "lemke: {e}"),
+            StepError::Mlcp(e) => write!(f, "{e}"),
+            StepError::NonFinite => write!(f, "non-finite velocities"),
+        }
+    }
+}
+
+impl StepError {
+    /// A short machine-readable name (for `steps.csv`).
+    pub fn code(&self) -> &'static str {
+        match self {
+            StepError::Lemke(LemkeError::RayTermination { .. }) => "ray_termination",
+            StepError::Lemke(LemkeError::PivotLimit { .. }) => "pivot_limit",
+            StepError::Lemke(LemkeError::NumericalBreakdown { .. }) => "numerical_breakdown",
+            StepError::Mlcp(MlcpError::SingularJointBlock { .. }) => "singular_joint_block",
+            StepError::NonFinite => "non_finite",
+        }
+    }
+}
+
+/// Wall time of each stage (s). Observational only: nothing in the physics
+/// reads it, so the trajectory stays bit-exact whatever the clock does.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Timings {
+    pub collision: f64,
+    pub assemble: f64,
+    pub solve: f64,
+    pub integrate: f64,
+    pub measure: f64,
+    pub total: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepReport {
+    /// The step this report describes (the state after it has `step` steps).
+    pub step: u64,
+    pub t: f64,
+    pub solver: &'static str,
+    /// `None` when the step succeeded.
+    pub error: Option<StepError>,
+    /// Lemke pivots summed over the solves of the step (0: trivial LCP).
+    pub pivots: usize,
+    /// Largest relative natural-map residual of the step's LCP solves.
+    pub residual: f64,
+    /// Size of the (last) pure LCP.
+    pub lcp_size: usize,
+    /// Contacts in the LCP, and those with a positive normal impulse.
+    pub contacts_in_lcp: usize,
+    pub active_contacts: usize,
+    /// Left-out contacts that the velocity check added back (re-solves).
+    pub resolves: usize,
+    pub max_penetration: f64,
+    pub max_joint_error: f64,
+    pub energy: Energy,
+    pub timings: Timings,
+}
+
+impl StepReport {
+    pub fn ok(&self) -> bool {
+        self.error.is_none()
+    }
+
+    pub fn status(&self) -> &'static str {
+        self.error.map_or("solved", |e| e.code())
+    }
+}

@@ -1,0 +1,102 @@
+//! Jacobian stage: one row per constraint direction, each touching at most
+//! two bodies. A row's velocity is `lin . v + ang . w` summed over its bodies;
+//! the same row, transposed, maps its impulse to the bodies.
+
+use super::applied::InvMass;
+use super::collision::Counterpart;
+use super::contact::Contact;
+use nalgebra::Vector3;
+
+/// The part of a row on one body.
+#[derive(Debug, Clone, Copy)]
+pub struct BodyJac {
+    pub body: usize,
+    pub lin: Vector3<f64>,
+    pub ang: Vector3<f64>,
+}
+
+impl BodyJac {
+    fn velocity(&self, nu: &[f64]) -> f64 {
+        let k = 6 * self.body;
+        self.lin.x * nu[k]
+            + self.lin.y * nu[k + 1]
+            + self.lin.z * nu[k + 2]
+            + self.ang.x * nu[k + 3]
+            + self.ang.y * nu[k + 4]
+            + self.ang.z * nu[k + 5]
+    }
+}
+
+/// One constraint row: `G^T nu` restricted to this direction.
+#[derive(Debug, Clone, Copy)]
+pub struct Row {
+    pub a: Option<BodyJac>,
+    pub b: Option<BodyJac>,
+}
+
+impl Row {
+    /// A row between A (lever arm `r_a`) and B (`r_b`) along the world
+    /// direction `dir`: `[dir ; r_A x dir]` on A and `-[dir ; r_B x dir]` on B,
+    /// the columns of `G_n`, `G_f` and `G_b` in formulation.md.
+    pub fn along(
+        dir: Vector3<f64>,
+        a: Option<(usize, Vector3<f64>)>,
+        b: Option<(usize, Vector3<f64>)>,
+    ) -> Row {
+        Row {
+            a: a.map(|(body, r)| BodyJac {
+                body,
+                lin: dir,
+                ang: r.cross(&dir),
+            }),
+            b: b.map(|(body, r)| BodyJac {
+                body,
+                lin: -dir,
+                ang: -r.cross(&dir),
+            }),
+        }
+    }
+
+    /// A contact row along `dir` (the normal or a friction direction).
+    pub fn contact(c: &Contact, dir: Vector3<f64>) -> Row {
+        let g = &c.geom;
+        let b = match g.b {
+            Counterpart::Plane(_) => None,
+            Counterpart::Body(j) => Some((j, g.r_b)),
+        };
+        Row::along(dir, Some((g.a, g.r_a)), b)
+    }
+
+    /// The row's velocity `G_k^T nu`.
+    pub fn velocity(&self, nu: &[f64]) -> f64 {
+        self.a.map_or(0.0, |j| j.velocity(nu)) + self.b.map_or(0.0, |j| j.velocity(nu))
+    }
+
+    /// `nu += M^-1 G_k impulse`.
+    pub fn apply(&self, impulse: f64, minv: &[InvMass], nu: &mut [f64]) {
+        for j in [self.a, self.b].into_iter().flatten() {
+            let m = &minv[j.body];
+            let dv = j.lin * (m.inv_m * impulse);
+            let dw = m.inv_i * j.ang * impulse;
+            let k = 6 * j.body;
+            for d in 0..3 {
+                nu[k + d] += dv[d];
+                nu[k + 3 + d] += dw[d];
+            }
+        }
+    }
+
+    /// Delassus entry `G_k^T M^-1 G_l`: nonzero only where the rows share a body.
+    pub fn coupling(&self, other: &Row, minv: &[InvMass]) -> f64 {
+        let mut sum = 0.0;
+        for j in [self.a, self.b].into_iter().flatten() {
+            for k in [other.a, other.b].into_iter().flatten() {
+                if j.body == k.body {
+                    let m = &minv[j.body];
+                    sum += m.inv_m * j.lin.dot(&k.lin) + j.ang.dot(&(m.inv_i * k.ang));
+                }
+            }
+        }
+        sum
+    }
+}

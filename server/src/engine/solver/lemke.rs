@@ -1,0 +1,274 @@
+//! Lemke's complementary pivoting algorithm with covering vector `e = 1` and
+//! start `z0 = 0`, made robust in floating point as formulation.md ("Lemke in
+//! floating point") prescribes:
+//!
+//! 1. `q_i` within `1e-13 max|q|` of zero is snapped to zero, and the first
+//!    pivot is chosen exactly among the remaining values.
+//! 2. Pivots are accepted only above a tolerance relative to the entering
+//!    column's largest entry; tiny negative right-hand sides count as zero in
+//!    the ratio test.
+//! 3. Ratios within `1e-9` (relative) tie, and ties are broken by the
+//!    lexicographic rule, which cannot cycle: it is the ratio test of the
+//!    problem with `q` perturbed by `(eps, eps^2, ..., eps^n)`, whose tie
+//!    breakers are the columns of the basis inverse, i.e. the tableau's `w`
+//!    columns. When the artificial `z0` ties, it leaves (the solution is found).
+//!
+//! Every returned `z` is verified against the original `M, q`.
+
+use super::{relative_residual, Lcp, SolveInfo};
+
+const Q_SNAP: f64 = 1e-13;
+const PIVOT_TOL: f64 = 1e-11;
+const RHS_SNAP: f64 = 1e-13;
+const TIE_TOL: f64 = 1e-9;
+/// Largest accepted relative residual of a returned solution.
+pub const VERIFY_TOL: f64 = 1e-8;
+
+/// How Lemke's algorithm failed, with the data that shows it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LemkeError {
+    /// The entering column has no positive entry: the path left along a ray.
+    /// For a copositive-plus `M` this proves the LCP infeasible.
+    RayTermination { pivots: usize, entering: usize },
+    /// More pivots than the limit (which grows with `n`).
+    PivotLimit { pivots: usize, limit: usize },
+    /// The tableau's answer fails verification against `M, q`.
+    NumericalBreakdown { pivots: usize, residual: f64 },
+}
+
+impl std::fmt::Display for LemkeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LemkeError::RayTermination { pivots, entering } => write!(
+                f,
+                "ray termination after {pivots} pivots (entering variable {entering})"
+            ),
+            LemkeError::PivotLimit { pivots, limit } => {
+                write!(f, "pivot limit: {pivots} pivots reached the limit {limit}")
+            }
+            LemkeError::NumericalBreakdown { pivots, residual } => write!(
+                f,
+                "numerical breakdown after {pivots} pivots: residual {residual:.3e} fails verification"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for LemkeError {}
+
+/// The pivot limit for a problem of size `n`.
+pub fn pivot_limit(n: usize) -> usize {
+    1000 + 50 * n
+}
+
+/// Lemke's solver with its scratch space, reused from call to call so that a
+/// step allocates nothing once the largest problem has been seen.
+#[derive(Debug, Default, Clone)]
+pub struct Lemke {
+    /// `n x (2n + 2)` row-major tableau `B^-1 [I, -M, -e, q]`.
+    tableau: Vec<f64>,
+    /// Variable basic in each row: `w_i = i`, `z_i = n + i`, `z0 = 2n`.
+    basis: Vec<usize>,
+    ties: Vec<usize>,
+}
+
+impl Lemke {
+    pub fn new() -> Lemke {
+        Lemke::default()
+    }
+
+    /// Solves `0 <= M z + q _|_ z >= 0` into `z`.
+    pub fn solve(&mut self, lcp: &Lcp, z: &mut [f64]) -> Result<SolveInfo, LemkeError> {
+        let n = lcp.n;
+        z[..n].fill(0.0);
+        let qmax = lcp.q.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        let snap = Q_SNAP * qmax;
+        // The trivial case costs nothing: z = 0 solves it when q >= 0.
+        if lcp.q.iter().all(|&qi| qi >= -snap) {
+            return Ok(SolveInfo {
+                work: 0,
+                residual: relative_residual(lcp, &z[..n]),
+            });
+        }
+
+        let width = 2 * n + 2;
+        let (z0, rhs) = (2 * n, 2 * n + 1);
+        self.tableau.clear();
+        self.tableau.resize(n * width, 0.0);
+        self.basis.clear();
+        for i in 0..n {
+            let row = &mut self.tableau[i * width..(i + 1) * width];
+            row[i] = 1.0;
+            for j in 0..n {
+                row[n + j] = -lcp.m[i * n + j];
+            }
+            row[z0] = -1.0;
+            row[rhs] = if lcp.q[i].abs() <= snap {
+                0.0
+            } else {
+                lcp.q[i]
+            };
+            self.basis.push(i);
+        }
+
+        // First pivot: z0 enters and the most negative q_i leaves. Among equal
+        // minima the perturbed problem picks the largest index (its eps^i is
+        // the smallest).
+        let mut r = 0;
+        for i in 0..n {
+            if self.tableau[i * width + rhs] <= self.tableau[r * width + rhs] {
+                r = i;
+            }
+        }
+        self.pivot(n, r, z0);
+        let mut leaving = std::mem::replace(&mut self.basis[r], z0);
+        let mut pivots = 1;
+        let limit = pivot_limit(n);
+
+        while leaving != z0 {
+            if pivots >= limit {
+                return Err(LemkeError::PivotLimit { pivots, limit });
+            }
+            let entering = if leaving < n {
+                leaving + n
+            } else {
+                leaving - n
+            };
+            let r = match self.ratio_test(n, entering) {
+                Some(r) => r,
+                None => return Err(LemkeError::RayTermination { pivots, entering }),
+            };
+            self.pivot(n, r, entering);
+            leaving = std::mem::replace(&mut self.basis[r], entering);
+            pivots += 1;
+        }
+
+        for (i, &var) in self.basis.iter().enumerate() {
+            if (n..2 * n).contains(&var) {
+                z[var - n] = self.tableau[i * width + rhs].max(0.0);
+            }
+        }
+        let residual = relative_residual(lcp, &z[..n]);
+        if residual <= VERIFY_TOL {
+            Ok(SolveInfo {
+                work: pivots,
+                residual,
+            })
+        } else {
+            Err(LemkeError::NumericalBreakdown { pivots, residual })
+        }
+    }
+
+    /// The row that leaves when column `col` enters, or `None` on a ray.
+    fn ratio_test(&mut self, n: usize, col: usize) -> Option<usize> {
+        let width = 2 * n + 2;
+        let rhs = width - 1;
+        let t = &self.tableau;
+        let dmax = (0..n).fold(0.0f64, |a, i| a.max(t[i * width + col].abs()));
+        if dmax == 0.0 || !dmax.is_finite() {
+            return None;
+        }
+        let rmax = (0..n).fold(0.0f64, |a, i| a.max(t[i * width + rhs].abs()));
+        let ratio = |i: usize| {
+            let b = t[i * width + rhs];
+            let b = if b <= RHS_SNAP * rmax { 0.0 } else { b };
+            b / t[i * width + col]
+        };
+        let mut theta = f64::INFINITY;
+        for i in 0..n {
+            if t[i * width + col] > PIVOT_TOL * dmax {
+                theta = theta.min(ratio(i));
+            }
+        }
+        if !theta.is_finite() {
+            return None;
+        }
+        self.ties.clear();
+        for i in 0..n {
+            if t[i * width + col] > PIVOT_TOL * dmax && ratio(i) <= theta * (1.0 + TIE_TOL) {
+                self.ties.push(i);
+            }
+        }
+        // The artificial variable leaving ends the path at a solution.
+        if let Some(&i) = self.ties.iter().find(|&&i| self.basis[i] == 2 * n) {
+            return Some(i);
+        }
+        // Lexicographic rule over the columns of B^-1 (the w columns).
+        for k in 0..n {
+            if self.ties.len() <= 1 {
+                break;
+            }
+            let v = |i: usize| t[i * width + k] / t[i * width + col];
+            let vmin = self
+                .ties
+                .iter()
+                .map(|&i| v(i))
+                .fold(f64::INFINITY, f64::min);
+            let scale = self.ties.iter().map(|&i| v(i).abs()).fold(0.0, f64::max);
+            self.ties.retain(|&i| v(i) - vmin <= TIE_TOL * scale);
+        }
+        self.ties.first().copied()
+    }
+
+    /// Gauss-Jordan pivot on `(r, col)`.
+    fn pivot(&mut self, n: usize, r: usize, col: usize) {
+        let width = 2 * n + 2;
+        let (before, rest) = self.tableau.split_at_mut(r * width);
+        let (prow, after) = rest.split_at_mut(width);
+        let inv = 1.0 / prow[col];
+        prow.iter_mut().for_each(|x| *x *= inv);
+        prow[col] = 1.0;
+        for row in before
+            .chunks_exact_mut(width)
+            .chain(after.chunks_exact_mut(width))
+        {
+            let f = row[col];
+            if f != 0.0 {
+                row.iter_mut()
+                    .zip(prow.iter())
+                    .for_each(|(x, p)| *x -= f * p);
+                row[col] = 0.0;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn solve(n: usize, m: &[f64], q: &[f64]) -> Result<(Vec<f64>, SolveInfo), LemkeError> {
+        let mut z = vec![0.0; n];
+        let info = Lemke::new().solve(&Lcp { n, m, q }, &mut z)?;
+        Ok((z, info))
+    }
+
+    #[test]
+    fn trivial_case_takes_no_pivot() {
+        let (z, info) = solve(2, &[2.0, 1.0, 1.0, 2.0], &[1.0, 0.0]).unwrap();
+        assert_eq!(z, vec![0.0, 0.0]);
+        assert_eq!(info.work, 0);
+    }
+
+    #[test]
+    fn spd_problem_is_solved_exactly() {
+        // M = [[2,1],[1,2]], q = [-5,-6]: both active, z = M^-1 (-q) = [4/3, 7/3].
+        let (z, _) = solve(2, &[2.0, 1.0, 1.0, 2.0], &[-5.0, -6.0]).unwrap();
+        assert!((z[0] - 4.0 / 3.0).abs() < 1e-14 && (z[1] - 7.0 / 3.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn infeasible_problem_ends_on_a_ray() {
+        // 0 <= -z - 1 has no solution with z >= 0.
+        let e = solve(1, &[-1.0], &[-1.0]).unwrap_err();
+        assert!(matches!(e, LemkeError::RayTermination { .. }), "{e}");
+    }
+
+    #[test]
+    fn degenerate_ties_do_not_cycle() {
+        // Three equal rows of q: every ratio ties at every pivot.
+        let m = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+        let (z, _) = solve(3, &m, &[-1.0, -1.0, -1.0]).unwrap();
+        assert_eq!(z, vec![1.0, 1.0, 1.0]);
+    }
+}

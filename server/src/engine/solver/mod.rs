@@ -1,0 +1,57 @@
+//! LCP solvers behind one interface, with one residual measure.
+//!
+//! The engine reduces each step to the dense LCP `0 <= M z + q  _|_  z >= 0`
+//! (formulation.md, "To a pure LCP"). Every solver is judged by the same
+//! natural-map residual `||z - max(0, z - w)||` with `w = M z + q`, the
+//! measure Siconos uses for its test corpus.
+
+pub mod lemke;
+
+pub use lemke::{Lemke, LemkeError};
+
+/// A dense LCP `0 <= M z + q _|_ z >= 0`, `M` row-major `n x n`.
+#[derive(Debug, Clone, Copy)]
+pub struct Lcp<'a> {
+    pub n: usize,
+    pub m: &'a [f64],
+    pub q: &'a [f64],
+}
+
+/// What a successful solve reports.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SolveInfo {
+    /// Pivots (Lemke) or iterations (iterative solvers).
+    pub work: usize,
+    /// Natural-map residual relative to `||q||` (see [`relative_residual`]).
+    pub residual: f64,
+}
+
+/// `w = M z + q`.
+pub fn slack(lcp: &Lcp, z: &[f64], w: &mut [f64]) {
+    for (i, wi) in w.iter_mut().enumerate().take(lcp.n) {
+        let row = &lcp.m[i * lcp.n..(i + 1) * lcp.n];
+        *wi = lcp.q[i] + row.iter().zip(z).map(|(a, b)| a * b).sum::<f64>();
+    }
+}
+
+/// `||z - max(0, z - w)||_2 / ||q||_2` (absolute when `q = 0`), with
+/// `w = M z + q` computed from the original data, never from a tableau.
+/// Infinite when `z` or `w` is not finite.
+pub fn relative_residual(lcp: &Lcp, z: &[f64]) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..lcp.n {
+        let row = &lcp.m[i * lcp.n..(i + 1) * lcp.n];
+        let w = lcp.q[i] + row.iter().zip(z).map(|(a, b)| a * b).sum::<f64>();
+        if !(w.is_finite() && z[i].is_finite()) {
+            return f64::INFINITY;
+        }
+        let r = z[i] - (z[i] - w).max(0.0);
+        sum += r * r;
+    }
+    let qn = lcp.q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if qn > 0.0 {
+        sum.sqrt() / qn
+    } else {
+        sum.sqrt()
+    }
+}

@@ -1,0 +1,42 @@
+//! The state: small, `Clone`, complete. A snapshot is a copy of it, so
+//! rollback and bit-exact replay need nothing else.
+
+use super::model::Model;
+use nalgebra::{UnitQuaternion, Vector3};
+
+/// Pose and twist of one body; velocities in the world frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyState {
+    pub x: Vector3<f64>,
+    pub q: UnitQuaternion<f64>,
+    pub v: Vector3<f64>,
+    pub w: Vector3<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct State {
+    /// Steps taken since the initial state.
+    pub step: u64,
+    /// Simulated time (s): `step * h`, kept as a product so it never drifts.
+    pub t: f64,
+    pub bodies: Vec<BodyState>,
+}
+
+impl State {
+    pub fn initial(model: &Model) -> State {
+        State {
+            step: 0,
+            t: 0.0,
+            bodies: model
+                .initial
+                .iter()
+                .map(|b| BodyState {
+                    x: b.position,
+                    q: b.orientation,
+                    v: b.velocity,
+                    w: b.angular_velocity,
+                })
+                .collect(),
+        }
+    }
+}

@@ -1,0 +1,15 @@
+//! Scenes built into the binary.
+
+use cosim_shared::{Scene, SceneError};
+
+/// The reference scene, run when no scene is given.
+pub const REFERENCE: &str = include_str!("../../examples/scenes/reference.toml");
+
+/// Parses the built-in reference scene.
+pub fn reference() -> Result<Scene, SceneError> {
+    let mut s = Scene::parse(REFERENCE, "<built-in reference.toml>")?;
+    if s.sim.name.is_none() {
+        s.sim.name = Some("reference".into());
+    }
+    Ok(s)
+}

@@ -1,0 +1,514 @@
+//! The scene description: what a `.toml` scene file holds, and its validation.
+//!
+//! Parsing is strict (unknown fields are refused) so that a typo never turns
+//! into a silently ignored setting. Every error names the file, the field (as a
+//! path such as `body[1].mass` or `body "ball".mass`), the offending value and,
+//! for syntax errors, the line and column that TOML reports.
+
+use serde::Deserialize;
+use std::fmt;
+use std::path::Path;
+
+/// Default stabilisation factor on the constraint violation (`beta` in
+/// formulation.md): 1 removes the whole violation in one step, as in the notes.
+pub const DEFAULT_BETA: f64 = 1.0;
+/// Default restitution threshold `v_min` (m/s): slower approaches are treated
+/// as resting contact, or resting objects jitter.
+pub const DEFAULT_RESTITUTION_THRESHOLD: f64 = 1e-2;
+/// Default margin (m) added to the distance a contact could close within a
+/// step before it is left out of the LCP.
+pub const DEFAULT_CONTACT_MARGIN: f64 = 1e-3;
+
+/// A whole scene file.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    pub sim: SimDesc,
+    #[serde(default, rename = "body")]
+    pub bodies: Vec<BodyDesc>,
+    #[serde(default, rename = "plane")]
+    pub planes: Vec<PlaneDesc>,
+    #[serde(default, rename = "joint")]
+    pub joints: Vec<JointDesc>,
+}
+
+/// Which LCP solver runs the step.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum SolverChoice {
+    /// Schur-complement reduction to a pure LCP, solved by Lemke's algorithm.
+    #[default]
+    Lemke,
+}
+
+impl SolverChoice {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SolverChoice::Lemke => "lemke",
+        }
+    }
+}
+
+impl std::str::FromStr for SolverChoice {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "lemke" => Ok(SolverChoice::Lemke),
+            other => Err(format!("unknown solver {other:?}, expected one of: lemke")),
+        }
+    }
+}
+
+/// `[sim]`: the time stepping.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SimDesc {
+    /// Scene name (output folder `out/<name>`); defaults to the file stem.
+    pub name: Option<String>,
+    /// Step `h` in seconds.
+    pub dt: f64,
+    /// Simulated seconds for `run` (give this or `steps`).
+    pub duration: Option<f64>,
+    /// Number of steps for `run` (give this or `duration`).
+    pub steps: Option<u64>,
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    /// `n_d`, directions of the polyhedral friction cone.
+    #[serde(default = "default_friction_directions")]
+    pub friction_directions: usize,
+    #[serde(default)]
+    pub solver: SolverChoice,
+    /// Stabilisation factor on penetration and joint error, in (0, 1].
+    #[serde(default = "default_beta")]
+    pub beta: f64,
+    /// Normal approach speed (m/s) below which restitution is not applied.
+    #[serde(default = "default_restitution_threshold")]
+    pub restitution_threshold: f64,
+    /// Extra distance (m) within which a contact always enters the LCP.
+    #[serde(default = "default_contact_margin")]
+    pub contact_margin: f64,
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -9.81]
+}
+fn default_friction_directions() -> usize {
+    8
+}
+fn default_beta() -> f64 {
+    DEFAULT_BETA
+}
+fn default_restitution_threshold() -> f64 {
+    DEFAULT_RESTITUTION_THRESHOLD
+}
+fn default_contact_margin() -> f64 {
+    DEFAULT_CONTACT_MARGIN
+}
+
+/// `[[body]]`: a solid sphere.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BodyDesc {
+    pub name: String,
+    pub radius: f64,
+    pub mass: f64,
+    pub position: [f64; 3],
+    /// Unit quaternion, scalar first.
+    #[serde(default = "identity_quaternion")]
+    pub orientation: [f64; 4],
+    #[serde(default)]
+    pub velocity: [f64; 3],
+    #[serde(default)]
+    pub angular_velocity: [f64; 3],
+    #[serde(default)]
+    pub friction: f64,
+    #[serde(default)]
+    pub restitution: f64,
+    /// Constant world-frame force (N) on the centre of mass, besides gravity.
+    #[serde(default)]
+    pub force: [f64; 3],
+}
+
+fn identity_quaternion() -> [f64; 4] {
+    [1.0, 0.0, 0.0, 0.0]
+}
+
+/// `[[plane]]`: a fixed infinite plane; bodies stay on the side its normal
+/// points to.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PlaneDesc {
+    pub name: String,
+    pub normal: [f64; 3],
+    pub point: [f64; 3],
+    #[serde(default)]
+    pub friction: f64,
+    #[serde(default)]
+    pub restitution: f64,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum JointKind {
+    Spherical,
+}
+
+/// `[[joint]]`: a bilateral joint between two bodies or a body and the world.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct JointDesc {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: JointKind,
+    /// `"world"` or a body name.
+    pub body_a: String,
+    pub body_b: String,
+    /// World point at t = 0, fixed in both bodies from then on.
+    pub anchor: [f64; 3],
+    /// Constant joint torque: `+torque` on body_b, `-torque` on body_a.
+    #[serde(default)]
+    pub torque: [f64; 3],
+}
+
+/// The name a joint uses for the fixed world.
+pub const WORLD: &str = "world";
+
+/// A scene that cannot be used, with everything needed to fix it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneError {
+    /// The file (or `<built-in>` for embedded scenes).
+    pub file: String,
+    /// Line and column (1-based), where TOML reports them.
+    pub location: Option<(usize, usize)>,
+    /// The field at fault, e.g. `body "ball".mass`; empty when TOML gives none.
+    pub field: String,
+    /// What is wrong, with the offending value.
+    pub message: String,
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file)?;
+        if let Some((line, col)) = self.location {
+            write!(f, ":{line}:{col}")?;
+        }
+        if self.field.is_empty() {
+            write!(f, ": {}", self.message)
+        } else {
+            write!(f, ": {}: {}", self.field, self.message)
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+impl Scene {
+    /// Reads and validates a scene file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: file.clone(),
+            location: None,
+            field: String::new(),
+            message: format!("cannot read the file: {e}"),
+        })?;
+        let mut scene = Scene::parse(&text, &file)?;
+        if scene.sim.name.is_none() {
+            scene.sim.name = path.file_stem().map(|s| s.to_string_lossy().into_owned());
+        }
+        Ok(scene)
+    }
+
+    /// Parses and validates scene text; `file` only labels the errors.
+    pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
+        let scene: Scene = toml::from_str(text).map_err(|e| toml_error(&e, text, file))?;
+        scene.validate(file)?;
+        Ok(scene)
+    }
+
+    /// The scene's name, used for the output folder.
+    pub fn name(&self) -> &str {
+        self.sim.name.as_deref().unwrap_or("scene")
+    }
+
+    /// Number of steps `run` takes: `steps`, or `duration / dt` rounded.
+    pub fn step_count(&self) -> u64 {
+        match (self.sim.steps, self.sim.duration) {
+            (Some(n), _) => n,
+            (None, Some(t)) => (t / self.sim.dt).round() as u64,
+            (None, None) => 0,
+        }
+    }
+
+    /// Checks every rule that TOML's types cannot express.
+    pub fn validate(&self, file: &str) -> Result<(), SceneError> {
+        let err = |field: String, message: String| SceneError {
+            file: file.to_string(),
+            location: None,
+            field,
+            message,
+        };
+        let sim = &self.sim;
+        positive(sim.dt).map_err(|m| err("sim.dt".into(), m))?;
+        match (sim.duration, sim.steps) {
+            (Some(_), Some(_)) => {
+                return Err(err(
+                    "sim.steps".into(),
+                    "give either sim.duration or sim.steps, not both".into(),
+                ))
+            }
+            (None, None) => {
+                return Err(err(
+                    "sim.duration".into(),
+                    "missing: give sim.duration (seconds) or sim.steps".into(),
+                ))
+            }
+            (Some(t), None) => positive(t).map_err(|m| err("sim.duration".into(), m))?,
+            (None, Some(0)) => {
+                return Err(err("sim.steps".into(), "= 0: must be at least 1".into()))
+            }
+            (None, Some(_)) => {}
+        }
+        finite3(&sim.gravity).map_err(|m| err("sim.gravity".into(), m))?;
+        if !(3..=64).contains(&sim.friction_directions) {
+            return Err(err(
+                "sim.friction_directions".into(),
+                format!(
+                    "= {}: must be between 3 and 64 (an even number keeps straight sliding exact)",
+                    sim.friction_directions
+                ),
+            ));
+        }
+        if !(sim.beta.is_finite() && sim.beta > 0.0 && sim.beta <= 1.0) {
+            return Err(err(
+                "sim.beta".into(),
+                format!("= {}: must lie in (0, 1]", sim.beta),
+            ));
+        }
+        nonneg(sim.restitution_threshold)
+            .map_err(|m| err("sim.restitution_threshold".into(), m))?;
+        nonneg(sim.contact_margin).map_err(|m| err("sim.contact_margin".into(), m))?;
+
+        // (name, field that first used it), to refuse duplicates by name.
+        let mut names: Vec<(String, String)> = Vec::new();
+        let mut claim = |name: &str, field: String| -> Result<(), SceneError> {
+            if name.trim().is_empty() {
+                return Err(err(field, "is empty: every object needs a name".into()));
+            }
+            if name == WORLD {
+                return Err(err(
+                    field,
+                    format!("= {name:?}: the name {WORLD:?} is reserved for the fixed world"),
+                ));
+            }
+            if let Some((_, first)) = names.iter().find(|(n, _)| n == name) {
+                return Err(err(
+                    field,
+                    format!("= {name:?}: duplicate name, already used by {first}"),
+                ));
+            }
+            names.push((name.to_string(), field));
+            Ok(())
+        };
+
+        for (i, b) in self.bodies.iter().enumerate() {
+            claim(&b.name, format!("body[{i}].name"))?;
+            let f = |k: &str| format!("body {:?}.{k}", b.name);
+            positive(b.radius).map_err(|m| err(f("radius"), m))?;
+            positive(b.mass).map_err(|m| err(f("mass"), m))?;
+            finite3(&b.position).map_err(|m| err(f("position"), m))?;
+            finite3(&b.velocity).map_err(|m| err(f("velocity"), m))?;
+            finite3(&b.angular_velocity).map_err(|m| err(f("angular_velocity"), m))?;
+            finite3(&b.force).map_err(|m| err(f("force"), m))?;
+            unit_quaternion(&b.orientation).map_err(|m| err(f("orientation"), m))?;
+            nonneg(b.friction).map_err(|m| err(f("friction"), m))?;
+            unit_interval(b.restitution).map_err(|m| err(f("restitution"), m))?;
+        }
+        for (i, p) in self.planes.iter().enumerate() {
+            claim(&p.name, format!("plane[{i}].name"))?;
+            let f = |k: &str| format!("plane {:?}.{k}", p.name);
+            finite3(&p.normal).map_err(|m| err(f("normal"), m))?;
+            finite3(&p.point).map_err(|m| err(f("point"), m))?;
+            let len2: f64 = p.normal.iter().map(|x| x * x).sum();
+            if len2 <= 1e-24 {
+                return Err(err(
+                    f("normal"),
+                    format!("= {:?}: a plane's normal must not be zero", p.normal),
+                ));
+            }
+            nonneg(p.friction).map_err(|m| err(f("friction"), m))?;
+            unit_interval(p.restitution).map_err(|m| err(f("restitution"), m))?;
+        }
+        for (i, j) in self.joints.iter().enumerate() {
+            claim(&j.name, format!("joint[{i}].name"))?;
+            let f = |k: &str| format!("joint {:?}.{k}", j.name);
+            for (key, body) in [("body_a", &j.body_a), ("body_b", &j.body_b)] {
+                if body != WORLD && !self.bodies.iter().any(|b| &b.name == body) {
+                    let known: Vec<&str> = self.bodies.iter().map(|b| b.name.as_str()).collect();
+                    return Err(err(
+                        f(key),
+                        format!(
+                            "= {body:?}: unknown body (known: \"world\", {})",
+                            known
+                                .iter()
+                                .map(|n| format!("{n:?}"))
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                    ));
+                }
+            }
+            if j.body_a == j.body_b {
+                return Err(err(
+                    f("body_b"),
+                    format!("= {:?}: a joint needs two different bodies", j.body_b),
+                ));
+            }
+            finite3(&j.anchor).map_err(|m| err(f("anchor"), m))?;
+            finite3(&j.torque).map_err(|m| err(f("torque"), m))?;
+        }
+        Ok(())
+    }
+}
+
+fn positive(x: f64) -> Result<(), String> {
+    if x.is_finite() && x > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("= {x}: must be a positive finite number"))
+    }
+}
+
+fn nonneg(x: f64) -> Result<(), String> {
+    if x.is_finite() && x >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!("= {x}: must be a finite number >= 0"))
+    }
+}
+
+fn unit_interval(x: f64) -> Result<(), String> {
+    if x.is_finite() && (0.0..=1.0).contains(&x) {
+        Ok(())
+    } else {
+        Err(format!("= {x}: must lie in [0, 1]"))
+    }
+}
+
+fn finite3(v: &[f64; 3]) -> Result<(), String> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(format!("= {v:?}: every component must be finite"))
+    }
+}
+
+/// Refuses a quaternion that is not unit length rather than normalising it
+/// silently: a typo in one component would otherwise become a different,
+/// plausible-looking orientation.
+fn unit_quaternion(q: &[f64; 4]) -> Result<(), String> {
+    if !q.iter().all(|x| x.is_finite()) {
+        return Err(format!("= {q:?}: every component must be finite"));
+    }
+    let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if (norm - 1.0).abs() > 1e-6 {
+        return Err(format!(
+            "= {q:?}: not a unit quaternion (norm {norm}); give [w, x, y, z] with norm 1"
+        ));
+    }
+    Ok(())
+}
+
+/// Turns a TOML error into a `SceneError` with the line and column of its span
+/// and, where the message names it, the field at fault.
+fn toml_error(e: &toml::de::Error, text: &str, file: &str) -> SceneError {
+    let location = e.span().map(|span| line_col(text, span.start));
+    let message = e.message().trim().to_string();
+    // The field: the key on the offending line, when the span points into one.
+    let field = e
+        .span()
+        .and_then(|span| key_at(text, span.start))
+        .unwrap_or_default();
+    SceneError {
+        file: file.to_string(),
+        location,
+        field,
+        message,
+    }
+}
+
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+/// The dotted path `table.key` of the key on the line holding `offset`,
+/// e.g. `body.radius`, or `None` when that line holds no `key =`.
+fn key_at(text: &str, offset: usize) -> Option<String> {
+    let offset = offset.min(text.len());
+    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[offset..].find('\n').map_or(text.len(), |i| offset + i);
+    let line = &text[line_start..line_end];
+    let key = line.split('=').next()?.trim();
+    if key.is_empty() || key.starts_with('[') || !line.contains('=') {
+        return None;
+    }
+    // The nearest table header above the line; for an array of tables
+    // (`[[body]]`) also its index, counting the same headers above it.
+    let above: Vec<&str> = text[..line_start].lines().map(str::trim).collect();
+    let header = above.iter().rev().find(|l| l.starts_with('['));
+    Some(match header {
+        Some(h) if h.starts_with("[[") => {
+            let name = h.trim_matches(|c| c == '[' || c == ']').trim();
+            let index = above.iter().filter(|l| *l == h).count() - 1;
+            format!("{name}[{index}].{key}")
+        }
+        Some(h) => format!("{}.{key}", h.trim_matches(|c| c == '[' || c == ']').trim()),
+        None => key.to_string(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+[sim]
+dt = 0.001
+duration = 1.0
+
+[[body]]
+name = "ball"
+radius = 0.1
+mass = 1.0
+position = [0.0, 0.0, 0.5]
+"#;
+
+    #[test]
+    fn minimal_scene_loads_with_defaults() {
+        let s = Scene::parse(MINIMAL, "t.toml").expect("valid");
+        assert_eq!(s.sim.friction_directions, 8);
+        assert_eq!(s.sim.gravity, [0.0, 0.0, -9.81]);
+        assert_eq!(s.bodies[0].orientation, [1.0, 0.0, 0.0, 0.0]);
+        assert_eq!(s.step_count(), 1000);
+    }
+
+    #[test]
+    fn syntax_error_has_line_and_field() {
+        let text = MINIMAL.replace("mass = 1.0", "mass = 1.0.0");
+        let e = Scene::parse(&text, "t.toml").unwrap_err();
+        assert_eq!(e.location.map(|l| l.0), Some(9), "{e}");
+        assert_eq!(e.field, "body[0].mass", "{e}");
+    }
+
+    #[test]
+    fn unknown_field_is_named() {
+        let text = MINIMAL.replace("mass = 1.0", "mass = 1.0\nmas = 2.0");
+        let e = Scene::parse(&text, "t.toml").unwrap_err();
+        assert!(e.to_string().contains("mas"), "{e}");
+        assert_eq!(e.location.map(|l| l.0), Some(10), "{e}");
+        assert_eq!(e.field, "body[0].mas", "{e}");
+    }
+}

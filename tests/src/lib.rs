@@ -1,0 +1,57 @@
+//! Helpers shared by the end-to-end physics tests in `tests/tests/`.
+
+use cosim_server::engine::{Engine, Model, StepReport};
+use cosim_shared::Scene;
+
+/// An engine on a scene given as TOML text; panics with the validation
+/// message if the test's own scene is wrong.
+pub fn engine(toml: &str) -> Engine {
+    let scene = Scene::parse(toml, "<test scene>").unwrap_or_else(|e| panic!("{e}"));
+    Engine::new(Model::from_scene(&scene))
+}
+
+/// Steps `n` times, handing each report to `check`; panics on a failed step.
+pub fn run(engine: &mut Engine, n: u64, mut check: impl FnMut(&Engine, &StepReport)) {
+    for _ in 0..n {
+        let r = engine.step();
+        if let Some(e) = r.error {
+            panic!("step {} failed: {e}", r.step);
+        }
+        check(engine, &r);
+    }
+}
+
+/// `[sim]` header with the given step and gravity.
+pub fn sim(dt: f64, steps: u64, gravity: [f64; 3]) -> String {
+    format!(
+        "[sim]\ndt = {dt:e}\nsteps = {steps}\ngravity = [{:e}, {:e}, {:e}]\nfriction_directions = 8\n",
+        gravity[0], gravity[1], gravity[2]
+    )
+}
+
+/// A `[[body]]` sphere.
+#[allow(clippy::too_many_arguments)]
+pub fn sphere(name: &str, r: f64, m: f64, x: [f64; 3], v: [f64; 3], mu: f64, e: f64) -> String {
+    format!(
+        "[[body]]\nname = \"{name}\"\nradius = {r:e}\nmass = {m:e}\nposition = [{:e}, {:e}, {:e}]\nvelocity = [{:e}, {:e}, {:e}]\nfriction = {mu:e}\nrestitution = {e:e}\n",
+        x[0], x[1], x[2], v[0], v[1], v[2]
+    )
+}
+
+/// A `[[plane]]` through `point` with normal `n`.
+pub fn plane(name: &str, n: [f64; 3], point: [f64; 3], mu: f64, e: f64) -> String {
+    format!(
+        "[[plane]]\nname = \"{name}\"\nnormal = [{:e}, {:e}, {:e}]\npoint = [{:e}, {:e}, {:e}]\nfriction = {mu:e}\nrestitution = {e:e}\n",
+        n[0], n[1], n[2], point[0], point[1], point[2]
+    )
+}
+
+/// A spherical `[[joint]]`.
+pub fn joint(name: &str, a: &str, b: &str, anchor: [f64; 3]) -> String {
+    format!(
+        "[[joint]]\nname = \"{name}\"\ntype = \"spherical\"\nbody_a = \"{a}\"\nbody_b = \"{b}\"\nanchor = [{:e}, {:e}, {:e}]\n",
+        anchor[0], anchor[1], anchor[2]
+    )
+}
+
+pub const G: f64 = 9.81;
