@@ -1,5 +1,7 @@
 //! `cosim-server`: the engine (a pure library) and the edges around it: the
 //! built-in scenes, the output writers and the command line.
 
+pub mod cli;
 pub mod engine;
+pub mod output;
 pub mod scenes;

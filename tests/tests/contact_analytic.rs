@@ -5,7 +5,7 @@ use cosim_server::engine::ImpulseKind;
 use cosim_tests::*;
 use nalgebra::Vector3;
 
-/// 1. A sphere resting on a floor: the normal impulse of every step is
+/// Acceptance 1: A sphere resting on a floor: the normal impulse of every step is
 /// `m g h` (to 1e-9 relative) and nothing moves in 10 s.
 #[test]
 fn resting_sphere_carries_its_weight_without_drift() {
@@ -74,7 +74,7 @@ fn roll_down_incline(h: f64, nd: usize) -> (f64, f64) {
     ((b.x - start).dot(&down), slip)
 }
 
-/// 2. Rolling without slip down 30 degrees, mu = 0.5: `5/7 g sin(theta)`,
+/// Acceptance 2: Rolling without slip down 30 degrees, mu = 0.5: `5/7 g sin(theta)`,
 /// 1.7518 m in 1 s within 0.5 % at h = 1e-3, error linear in h.
 #[test]
 fn sphere_rolls_down_incline_without_slip() {
@@ -101,7 +101,7 @@ fn sphere_rolls_down_incline_without_slip() {
     assert!(slip < 1e-6 && ((d - exact) / exact).abs() < 5e-3);
 }
 
-/// 3. A sphere sliding at 2 m/s on a floor with mu = 0.3 starts rolling at
+/// Acceptance 3: A sphere sliding at 2 m/s on a floor with mu = 0.3 starts rolling at
 /// `2 v0 / (7 mu g)` = 0.1942 s and rolls on at `5/7 v0` = 1.4286 m/s, in a
 /// straight line whatever the direction.
 #[test]
@@ -154,7 +154,7 @@ fn sliding_sphere_starts_rolling_at_the_analytic_time() {
     }
 }
 
-/// 4. A drop from 1 m (lowest point 1 m above the plane) with e = 0.5:
+/// Acceptance 4: A drop from 1 m (lowest point 1 m above the plane) with e = 0.5:
 /// first apex `e^2 h` = 0.25 m within 1 %.
 #[test]
 fn dropped_sphere_rebounds_to_e_squared_h() {
@@ -180,7 +180,7 @@ fn dropped_sphere_rebounds_to_e_squared_h() {
     }
 }
 
-/// 5. Two spheres head-on, no friction, unequal masses: momentum conserved
+/// Acceptance 5: Two spheres head-on, no friction, unequal masses: momentum conserved
 /// to 1e-12 relative and the velocities of Newton's law of restitution.
 #[test]
 fn head_on_collision_obeys_newton_restitution() {

@@ -231,6 +231,7 @@ impl Engine {
             contacts_in_lcp: 0,
             active_contacts: 0,
             resolves: 0,
+            fallbacks: 0,
             max_penetration: 0.0,
             max_joint_error: 0.0,
             energy: Default::default(),
@@ -274,8 +275,10 @@ impl Engine {
         let ws = &mut self.ws;
         let t0 = Instant::now();
         applied::free_velocity(model, &self.state, &self.inputs, &ws.minv, &mut ws.nu_free);
-        prune::select(&mut ws.contacts, &self.state, &ws.nu_free, &model.params);
+        let p = &model.params;
+        prune::select(&mut ws.contacts, &self.state, &ws.nu_free, p, p.full);
         timings.assemble += t0.elapsed().as_secs_f64();
+        let mut canonical = false;
         loop {
             let t0 = Instant::now();
             {
@@ -297,7 +300,17 @@ impl Engine {
                     m: &m.lcp_m,
                     q: &m.lcp_q,
                 };
-                let info = self.lemke.solve(&lcp, &mut m.z).map_err(StepError::Lemke)?;
+                let info = match self.lemke.solve(&lcp, &mut m.z) {
+                    Ok(info) => info,
+                    Err(e) => {
+                        if p.full && report.fallbacks == 0 {
+                            report.fallbacks += 1;
+                            prune::select(&mut ws.contacts, &self.state, &ws.nu_free, p, false);
+                            continue;
+                        }
+                        return Err(StepError::Lemke(e));
+                    }
+                };
                 report.pivots += info.work;
                 report.residual = report.residual.max(info.residual);
                 report.lcp_size = n;
@@ -308,11 +321,21 @@ impl Engine {
             if !ws.nu.iter().all(|x| x.is_finite()) {
                 return Err(StepError::NonFinite);
             }
-            let added = prune::check_left_out(&mut ws.contacts, &ws.nu, model.params.h);
-            if added == 0 {
+            let added = prune::check_left_out(&mut ws.contacts, &ws.nu, p.h);
+            if added > 0 {
+                report.resolves += 1;
+                continue;
+            }
+            // NOTE: once, after the first accepted solve: re-solve on the
+            // active contacts only, so that the answer depends on the active
+            // set alone (see prune.rs).
+            if canonical {
                 return Ok(());
             }
-            report.resolves += 1;
+            canonical = true;
+            if !prune::keep_active(&mut ws.contacts, &ws.mlcp.lcp_contacts, &ws.mlcp.z) {
+                return Ok(());
+            }
         }
     }
 

@@ -18,7 +18,7 @@
 use super::{relative_residual, Lcp, SolveInfo};
 
 const Q_SNAP: f64 = 1e-13;
-const PIVOT_TOL: f64 = 1e-11;
+const PIVOT_TOL: f64 = 1e-9;
 const RHS_SNAP: f64 = 1e-13;
 const TIE_TOL: f64 = 1e-9;
 /// Largest accepted relative residual of a returned solution.
@@ -185,7 +185,12 @@ impl Lemke {
         }
         self.ties.clear();
         for i in 0..n {
-            if t[i * width + col] > PIVOT_TOL * dmax && ratio(i) <= theta * (1.0 + TIE_TOL) {
+            // A tie: the ratio within tie_tol of the minimum, or a
+            // right-hand side that differs from the minimum's by no more than
+            // round-off on the column's scale (two rows that are equal but for
+            // round-off, e.g. z0's and a degenerate twin, must tie).
+            let d = t[i * width + col];
+            if d > PIVOT_TOL * dmax && ratio(i) <= theta * (1.0 + TIE_TOL) + RHS_SNAP * rmax / d {
                 self.ties.push(i);
             }
         }

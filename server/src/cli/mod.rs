@@ -1,0 +1,74 @@
+//! The command line: `cosim-server run [SCENE] ...`.
+
+mod run;
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "cosim-server",
+    version,
+    about = "Rigid multibody dynamics with exact frictional contact"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Run a scene (the built-in reference scene without SCENE) and write
+    /// states.csv, impulses.csv, steps.csv and summary.json.
+    Run(RunArgs),
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct RunArgs {
+    /// Scene file (TOML); the built-in reference scene when omitted.
+    pub scene: Option<PathBuf>,
+    /// Step h in seconds (keeps the scene's simulated duration).
+    #[arg(long)]
+    pub dt: Option<f64>,
+    /// Simulated seconds.
+    #[arg(long, conflicts_with = "steps")]
+    pub duration: Option<f64>,
+    /// Number of steps.
+    #[arg(long)]
+    pub steps: Option<u64>,
+    /// LCP solver.
+    #[arg(long)]
+    pub solver: Option<cosim_shared::SolverChoice>,
+    /// Directions of the polyhedral friction cone (n_d).
+    #[arg(long)]
+    pub friction_directions: Option<usize>,
+    /// Keep every potential contact in the LCP (no pruning), as in the notes.
+    #[arg(long)]
+    pub full: bool,
+    /// Output folder; default out/<scene name>.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print nothing but errors.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Exit code for bad input (a scene or an option), as clap uses.
+pub const EXIT_BAD_INPUT: u8 = 2;
+/// Exit code for a run whose solver failed.
+pub const EXIT_FAILED: u8 = 1;
+
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    match cli.command {
+        Command::Run(args) => run::run(&args),
+    }
+}

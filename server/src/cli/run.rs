@@ -1,0 +1,252 @@
+//! `cosim-server run`.
+
+use super::{RunArgs, EXIT_BAD_INPUT, EXIT_FAILED};
+use crate::engine::{Engine, Model, StepReport};
+use crate::output::{num, Writers};
+use cosim_shared::{Scene, SceneError};
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+/// Loads the scene and applies the command-line overrides, validating both.
+pub fn load(args: &RunArgs) -> Result<Scene, SceneError> {
+    let mut scene = match &args.scene {
+        Some(path) => Scene::load(path)?,
+        None => crate::scenes::reference()?,
+    };
+    let file = args
+        .scene
+        .as_ref()
+        .map_or("<built-in reference.toml>".to_string(), |p| {
+            p.display().to_string()
+        });
+    let simulated = scene.step_count() as f64 * scene.sim.dt;
+    if let Some(dt) = args.dt {
+        scene.sim.dt = dt;
+    }
+    if let Some(t) = args.duration {
+        scene.sim.duration = Some(t);
+        scene.sim.steps = None;
+    } else if let Some(n) = args.steps {
+        scene.sim.steps = Some(n);
+        scene.sim.duration = None;
+    } else if args.dt.is_some() {
+        scene.sim.duration = Some(simulated);
+        scene.sim.steps = None;
+    }
+    if let Some(s) = args.solver {
+        scene.sim.solver = s;
+    }
+    if let Some(nd) = args.friction_directions {
+        scene.sim.friction_directions = nd;
+    }
+    // The overrides obey the same rules as the file; name the option.
+    scene.validate(&file).map_err(|mut e| {
+        let option = match e.field.as_str() {
+            "sim.dt" if args.dt.is_some() => Some("--dt"),
+            "sim.duration" if args.duration.is_some() => Some("--duration"),
+            "sim.steps" if args.steps.is_some() => Some("--steps"),
+            "sim.friction_directions" if args.friction_directions.is_some() => {
+                Some("--friction-directions")
+            }
+            _ => None,
+        };
+        if let Some(o) = option {
+            e.file = "command line".into();
+            e.field = o.into();
+        }
+        e
+    })?;
+    Ok(scene)
+}
+
+/// What a run measured, for the summary.
+#[derive(Default)]
+struct Tally {
+    failures: u64,
+    first_failure: Option<String>,
+    max_penetration: f64,
+    max_joint_error: f64,
+    max_lcp_size: usize,
+    pivots: u64,
+    max_residual: f64,
+    resolves: u64,
+    fallbacks: u64,
+}
+
+impl Tally {
+    fn add(&mut self, r: &StepReport) {
+        self.max_penetration = self.max_penetration.max(r.max_penetration);
+        self.max_joint_error = self.max_joint_error.max(r.max_joint_error);
+        self.max_lcp_size = self.max_lcp_size.max(r.lcp_size);
+        self.pivots += r.pivots as u64;
+        self.max_residual = self.max_residual.max(r.residual);
+        self.resolves += r.resolves as u64;
+        self.fallbacks += r.fallbacks as u64;
+        if let Some(e) = r.error {
+            self.failures += 1;
+            self.first_failure
+                .get_or_insert_with(|| format!("step {}: {e}", r.step + 1));
+        }
+    }
+}
+
+pub fn run(args: &RunArgs) -> ExitCode {
+    let scene = match load(args) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    let mut model = Model::from_scene(&scene);
+    model.params.full = args.full;
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(scene.name()));
+    match simulate(model, scene.step_count(), &out, args.quiet) {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(EXIT_FAILED),
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_FAILED)
+        }
+    }
+}
+
+/// Runs `steps` steps writing every file; `Ok(false)` when a step failed.
+fn simulate(model: Model, steps: u64, out: &std::path::Path, quiet: bool) -> std::io::Result<bool> {
+    let started = Instant::now();
+    let mut writers = Writers::create(out)?;
+    let mut engine = Engine::new(model);
+    let energy_initial = crate::engine::measure::energy(engine.model(), engine.state());
+    writers.state(&engine)?;
+    let mut tally = Tally::default();
+    let progress = !quiet && std::io::stderr().is_terminal() && steps >= 2000;
+    let mut last_report = None;
+    for k in 0..steps {
+        let report = engine.step();
+        tally.add(&report);
+        if report.ok() {
+            writers.state(&engine)?;
+            writers.impulses(&engine)?;
+        }
+        writers.step(&report)?;
+        last_report = Some(report);
+        if !report.ok() {
+            break;
+        }
+        if k % 1000 == 999 {
+            writers.flush()?;
+        }
+        if progress && k % (steps / 100).max(1) == 0 {
+            let frac = (k + 1) as f64 / steps as f64;
+            let bar = (frac * 40.0) as usize;
+            eprint!(
+                "\r[{}{}] {:3.0}% step {}/{steps}",
+                "#".repeat(bar),
+                " ".repeat(40 - bar),
+                frac * 100.0,
+                k + 1
+            );
+        }
+    }
+    if progress {
+        eprintln!();
+    }
+    writers.flush()?;
+    let wall = started.elapsed().as_secs_f64();
+    let state = engine.state();
+    let model = engine.model();
+    let energy_final = last_report.map(|r| r.energy).unwrap_or(energy_initial);
+    let summary = serde_json::json!({
+        "scene": model.name,
+        "steps": state.step,
+        "steps_requested": steps,
+        "t_end": state.t,
+        "dt": model.params.h,
+        "solver": model.params.solver.as_str(),
+        "friction_directions": model.params.friction_directions,
+        "pruning": !model.params.full,
+        "failures": tally.failures,
+        "first_failure": tally.first_failure,
+        "max_penetration": tally.max_penetration,
+        "max_joint_error": tally.max_joint_error,
+        "max_lcp_size": tally.max_lcp_size,
+        "pivots": tally.pivots,
+        "max_residual": tally.max_residual,
+        "resolves": tally.resolves,
+        "fallbacks_to_pruned": tally.fallbacks,
+        "energy_initial": energy_initial.total,
+        "energy_final": energy_final.total,
+        "energy_midpoint_initial": energy_initial.midpoint,
+        "energy_midpoint_final": energy_final.midpoint,
+        "wall_seconds": wall,
+    });
+    let path = out.join("summary.json");
+    let mut f = std::fs::File::create(&path)?;
+    writeln!(
+        f,
+        "{}",
+        serde_json::to_string_pretty(&summary).unwrap_or_default()
+    )?;
+
+    if !quiet {
+        println!(
+            "scene        {} ({} bodies, {} planes, {} joints)",
+            model.name,
+            model.bodies.len(),
+            model.planes.len(),
+            model.joints.len()
+        );
+        println!(
+            "steps        {} of h = {} s, t_end = {} s",
+            state.step,
+            num(model.params.h),
+            num(state.t)
+        );
+        println!(
+            "solver       {}, n_d = {}, {}",
+            model.params.solver.as_str(),
+            model.params.friction_directions,
+            if model.params.full {
+                "full LCP (no pruning)"
+            } else {
+                "pruned LCP"
+            }
+        );
+        println!("LCP          largest {} unknowns, {} pivots in all, worst residual {:.1e}, {} re-solves, {} fallbacks to the pruned set", tally.max_lcp_size, tally.pivots, tally.max_residual, tally.resolves, tally.fallbacks);
+        println!(
+            "failures     {}{}",
+            tally.failures,
+            tally
+                .first_failure
+                .as_ref()
+                .map_or(String::new(), |f| format!(" (first: {f})"))
+        );
+        println!("penetration  max {:.3e} m", tally.max_penetration);
+        println!("joint error  max {:.3e} m", tally.max_joint_error);
+        println!(
+            "energy       {:.6} J -> {:.6} J (midpoint {:.6} -> {:.6})",
+            energy_initial.total,
+            energy_final.total,
+            energy_initial.midpoint,
+            energy_final.midpoint
+        );
+        println!(
+            "wall time    {:.3} s ({:.0} steps/s)",
+            wall,
+            state.step as f64 / wall.max(1e-9)
+        );
+        println!(
+            "output       {}/{{states,impulses,steps}}.csv, summary.json",
+            writers.dir().display()
+        );
+    }
+    if let Some(f) = &tally.first_failure {
+        eprintln!("error: the solver failed at {f}; the files hold every step before it");
+    }
+    Ok(tally.failures == 0)
+}

@@ -1,0 +1,161 @@
+//! Writers of a run's output files: `states.csv`, `impulses.csv`,
+//! `steps.csv` and `summary.json`. Each CSV row is complete per step and the
+//! writers are flushed regularly, so a run that stops early leaves readable
+//! files.
+
+use crate::engine::{Engine, ImpulseKind, Model, Party, StepReport};
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// A float as the shortest text that reads back to the same bits, in plain
+/// notation where that stays short and in scientific notation otherwise.
+pub fn num(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || (1e-4..1e15).contains(&a) || !x.is_finite() {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+pub const STATES_HEADER: &str = "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz";
+pub const IMPULSES_HEADER: &str = "step,t,kind,name,body_a,body_b,px,py,pz";
+pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,fallbacks,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total";
+
+/// The three CSV files of a run.
+pub struct Writers {
+    dir: PathBuf,
+    states: BufWriter<File>,
+    impulses: BufWriter<File>,
+    steps: BufWriter<File>,
+    line: String,
+}
+
+fn create(dir: &Path, name: &str, header: &str) -> io::Result<BufWriter<File>> {
+    let path = dir.join(name);
+    let mut w =
+        BufWriter::new(File::create(&path).map_err(|e| {
+            io::Error::new(e.kind(), format!("cannot create {}: {e}", path.display()))
+        })?);
+    writeln!(w, "{header}")?;
+    Ok(w)
+}
+
+fn party_name(model: &Model, p: Party) -> &str {
+    match p {
+        Party::World => cosim_shared::scene::WORLD,
+        Party::Body(i) => &model.bodies[i].name,
+        Party::Plane(i) => &model.planes[i].name,
+    }
+}
+
+impl Writers {
+    pub fn create(dir: &Path) -> io::Result<Writers> {
+        std::fs::create_dir_all(dir).map_err(|e| {
+            io::Error::new(e.kind(), format!("cannot create {}: {e}", dir.display()))
+        })?;
+        Ok(Writers {
+            dir: dir.to_path_buf(),
+            states: create(dir, "states.csv", STATES_HEADER)?,
+            impulses: create(dir, "impulses.csv", IMPULSES_HEADER)?,
+            steps: create(dir, "steps.csv", STEPS_HEADER)?,
+            line: String::new(),
+        })
+    }
+
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// One row per body of the engine's current state.
+    pub fn state(&mut self, engine: &Engine) -> io::Result<()> {
+        use std::fmt::Write as _;
+        let s = engine.state();
+        self.line.clear();
+        for (b, body) in s.bodies.iter().zip(&engine.model().bodies) {
+            let q = b.q.quaternion();
+            let _ = write!(self.line, "{},{},{}", s.step, num(s.t), body.name);
+            for v in [
+                b.x.x, b.x.y, b.x.z, q.w, q.i, q.j, q.k, b.v.x, b.v.y, b.v.z, b.w.x, b.w.y, b.w.z,
+            ] {
+                let _ = write!(self.line, ",{}", num(v));
+            }
+            self.line.push('\n');
+        }
+        self.states.write_all(self.line.as_bytes())
+    }
+
+    /// The impulses of the step just taken, where they are not zero.
+    pub fn impulses(&mut self, engine: &Engine) -> io::Result<()> {
+        use std::fmt::Write as _;
+        let model = engine.model();
+        let s = engine.state();
+        self.line.clear();
+        for r in engine.impulses() {
+            if r.impulse.iter().all(|x| *x == 0.0) {
+                continue;
+            }
+            let (kind, name) = match r.kind {
+                ImpulseKind::Joint => ("joint", model.joints[r.index].name.clone()),
+                ImpulseKind::Normal => ("normal", contact_name(model, r.a, r.b)),
+                ImpulseKind::Friction => ("friction", contact_name(model, r.a, r.b)),
+            };
+            let _ = writeln!(
+                self.line,
+                "{},{},{kind},{name},{},{},{},{},{}",
+                s.step,
+                num(s.t),
+                party_name(model, r.a),
+                party_name(model, r.b),
+                num(r.impulse.x),
+                num(r.impulse.y),
+                num(r.impulse.z)
+            );
+        }
+        self.impulses.write_all(self.line.as_bytes())
+    }
+
+    /// The step report.
+    pub fn step(&mut self, r: &StepReport) -> io::Result<()> {
+        let t = &r.timings;
+        let e = &r.energy;
+        let fields = [
+            r.step.to_string(),
+            num(r.t),
+            r.solver.to_string(),
+            r.status().to_string(),
+            r.pivots.to_string(),
+            num(r.residual),
+            r.lcp_size.to_string(),
+            r.contacts_in_lcp.to_string(),
+            r.active_contacts.to_string(),
+            r.resolves.to_string(),
+            r.fallbacks.to_string(),
+            num(r.max_penetration),
+            num(r.max_joint_error),
+            num(e.kinetic),
+            num(e.potential),
+            num(e.total),
+            num(e.midpoint),
+            num(t.collision),
+            num(t.assemble),
+            num(t.solve),
+            num(t.integrate),
+            num(t.measure),
+            num(t.total),
+        ];
+        writeln!(self.steps, "{}", fields.join(","))
+    }
+
+    pub fn flush(&mut self) -> io::Result<()> {
+        self.states.flush()?;
+        self.impulses.flush()?;
+        self.steps.flush()
+    }
+}
+
+/// A contact's name: `a/b`, e.g. `upper/floor`.
+pub fn contact_name(model: &Model, a: Party, b: Party) -> String {
+    format!("{}/{}", party_name(model, a), party_name(model, b))
+}
