@@ -194,6 +194,9 @@ impl fmt::Display for SceneError {
         }
         if self.field.is_empty() {
             write!(f, ": {}", self.message)
+        } else if self.message.starts_with("= ") {
+            // "body \"ball\".mass = -1: must be ..."
+            write!(f, ": {} {}", self.field, self.message)
         } else {
             write!(f, ": {}: {}", self.field, self.message)
         }

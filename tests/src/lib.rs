@@ -55,3 +55,11 @@ pub fn joint(name: &str, a: &str, b: &str, anchor: [f64; 3]) -> String {
 }
 
 pub const G: f64 = 9.81;
+
+/// The text of a scene shipped in `examples/scenes/`.
+pub fn shipped_scene(name: &str) -> String {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../examples/scenes")
+        .join(name);
+    std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}

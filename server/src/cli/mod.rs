@@ -29,10 +29,10 @@ pub struct RunArgs {
     /// Scene file (TOML); the built-in reference scene when omitted.
     pub scene: Option<PathBuf>,
     /// Step h in seconds (keeps the scene's simulated duration).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub dt: Option<f64>,
     /// Simulated seconds.
-    #[arg(long, conflicts_with = "steps")]
+    #[arg(long, conflicts_with = "steps", allow_negative_numbers = true)]
     pub duration: Option<f64>,
     /// Number of steps.
     #[arg(long)]

@@ -313,8 +313,8 @@ impl Engine {
                 };
                 report.pivots += info.work;
                 report.residual = report.residual.max(info.residual);
-                report.lcp_size = n;
-                report.contacts_in_lcp = m.nc;
+                report.lcp_size = report.lcp_size.max(n);
+                report.contacts_in_lcp = report.contacts_in_lcp.max(m.nc);
                 m.recover(&ws.minv, &ws.nu_free, &mut ws.nu);
             }
             timings.solve += t1.elapsed().as_secs_f64();

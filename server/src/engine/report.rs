@@ -60,9 +60,10 @@ pub struct StepReport {
     pub pivots: usize,
     /// Largest relative natural-map residual of the step's LCP solves.
     pub residual: f64,
-    /// Size of the (last) pure LCP.
+    /// Size of the largest pure LCP solved in the step (the first solve's,
+    /// unless the velocity check added contacts).
     pub lcp_size: usize,
-    /// Contacts in the LCP, and those with a positive normal impulse.
+    /// Contacts in that LCP, and those with a positive normal impulse.
     pub contacts_in_lcp: usize,
     pub active_contacts: usize,
     /// Left-out contacts that the velocity check added back (re-solves).

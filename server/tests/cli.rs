@@ -1,0 +1,272 @@
+//! The command line: validation errors (acceptance 10) and the output files.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_cosim-server");
+
+/// A folder of its own for one test, removed when dropped (also on panic).
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(name: &str) -> TempDir {
+        let dir = std::env::temp_dir().join(format!("cosim-cli-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        TempDir(dir)
+    }
+    fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .output()
+        .expect("run cosim-server")
+}
+
+const GOOD: &str = r#"[sim]
+dt = 0.001
+steps = 50
+
+[[body]]
+name = "ball"
+radius = 0.1
+mass = 1.0
+position = [0.0, 0.0, 0.3]
+orientation = [1.0, 0.0, 0.0, 0.0]
+friction = 0.5
+
+[[body]]
+name = "other"
+radius = 0.1
+mass = 1.0
+position = [0.5, 0.0, 0.3]
+
+[[plane]]
+name = "floor"
+normal = [0.0, 0.0, 1.0]
+point = [0.0, 0.0, 0.0]
+
+[[joint]]
+name = "pin"
+type = "spherical"
+body_a = "world"
+body_b = "ball"
+anchor = [0.0, 0.0, 0.6]
+"#;
+
+/// Each broken scene: (what, replace this, by this, expected field, expected line).
+const CASES: &[(&str, &str, &str, &str, Option<usize>)] = &[
+    (
+        "toml syntax",
+        "mass = 1.0\nposition",
+        "mass = 1.0 1.0\nposition",
+        "body[0].mass",
+        Some(8),
+    ),
+    (
+        "unknown field",
+        "friction = 0.5",
+        "frictoin = 0.5",
+        "body[0].frictoin",
+        Some(11),
+    ),
+    (
+        "unknown body in joint",
+        "body_b = \"ball\"",
+        "body_b = \"bal\"",
+        "joint \"pin\".body_b",
+        None,
+    ),
+    (
+        "duplicate name",
+        "name = \"other\"",
+        "name = \"ball\"",
+        "body[1].name",
+        None,
+    ),
+    (
+        "non-positive mass",
+        "mass = 1.0\nposition",
+        "mass = -1.0\nposition",
+        "body \"ball\".mass",
+        None,
+    ),
+    (
+        "zero radius",
+        "radius = 0.1\nmass = 1.0\nposition = [0.0, 0.0, 0.3]",
+        "radius = 0.0\nmass = 1.0\nposition = [0.0, 0.0, 0.3]",
+        "body \"ball\".radius",
+        None,
+    ),
+    ("non-positive dt", "dt = 0.001", "dt = 0.0", "sim.dt", None),
+    (
+        "zero normal",
+        "normal = [0.0, 0.0, 1.0]",
+        "normal = [0.0, 0.0, 0.0]",
+        "plane \"floor\".normal",
+        None,
+    ),
+    (
+        "nan",
+        "position = [0.0, 0.0, 0.3]",
+        "position = [0.0, nan, 0.3]",
+        "body \"ball\".position",
+        None,
+    ),
+    (
+        "infinity",
+        "anchor = [0.0, 0.0, 0.6]",
+        "anchor = [0.0, 0.0, inf]",
+        "joint \"pin\".anchor",
+        None,
+    ),
+    (
+        "non-unit orientation",
+        "orientation = [1.0, 0.0, 0.0, 0.0]",
+        "orientation = [1.0, 0.1, 0.0, 0.0]",
+        "body \"ball\".orientation",
+        None,
+    ),
+];
+
+#[test]
+fn every_validation_case_exits_2_naming_the_field() {
+    let dir = TempDir::new("validation");
+    // The good scene runs.
+    let good = dir.path().join("good.toml");
+    std::fs::write(&good, GOOD).unwrap();
+    let out = run(&[
+        "run",
+        good.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        dir.path().join("o").to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for (what, from, to, field, line) in CASES {
+        assert!(GOOD.contains(from), "{what}: pattern not in the scene");
+        let path = dir.path().join(format!("{}.toml", what.replace(' ', "_")));
+        std::fs::write(&path, GOOD.replacen(from, to, 1)).unwrap();
+        let out = run(&[
+            "run",
+            path.to_str().unwrap(),
+            "--quiet",
+            "--out",
+            dir.path().join("o").to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{what}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{what}: not one line: {err}");
+        assert!(
+            err.contains(path.to_str().unwrap()),
+            "{what}: file not named: {err}"
+        );
+        assert!(
+            err.contains(field),
+            "{what}: field {field} not named: {err}"
+        );
+        if let Some(line) = line {
+            assert!(
+                err.contains(&format!(":{line}:")),
+                "{what}: line {line} not given: {err}"
+            );
+        }
+    }
+}
+
+#[test]
+fn bad_options_exit_2_naming_the_option() {
+    for (args, name) in [
+        (&["run", "--dt", "0", "--quiet"][..], "--dt"),
+        (&["run", "--steps", "0", "--quiet"][..], "--steps"),
+        (
+            &["run", "--friction-directions", "2", "--quiet"][..],
+            "--friction-directions",
+        ),
+        (
+            &["run", "/nonexistent/scene.toml", "--quiet"][..],
+            "/nonexistent/scene.toml",
+        ),
+    ] {
+        let out = run(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(name), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn reference_run_writes_every_file() {
+    let dir = TempDir::new("reference");
+    let out_dir = dir.path().join("out");
+    let out = run(&["run", "--steps", "300", "--out", out_dir.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("reference") && stdout.contains("failures     0"),
+        "{stdout}"
+    );
+
+    let states = std::fs::read_to_string(out_dir.join("states.csv")).unwrap();
+    let mut lines = states.lines();
+    assert_eq!(
+        lines.next(),
+        Some("step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz")
+    );
+    // Steps 0..=300, two bodies each.
+    assert_eq!(lines.clone().count(), 301 * 2);
+    assert!(lines
+        .next()
+        .unwrap()
+        .starts_with("0,0,upper,0.3,0,0.45,1,0,0,0,"));
+
+    let impulses = std::fs::read_to_string(out_dir.join("impulses.csv")).unwrap();
+    assert!(impulses.starts_with("step,t,kind,name,body_a,body_b,px,py,pz\n"));
+    for kind in [
+        ",joint,shoulder,world,upper,",
+        ",normal,upper/lower,upper,lower,",
+        ",friction,lower/floor,lower,floor,",
+    ] {
+        assert!(impulses.contains(kind), "no {kind} row");
+    }
+    let steps = std::fs::read_to_string(out_dir.join("steps.csv")).unwrap();
+    assert_eq!(steps.lines().count(), 301);
+
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("summary.json")).unwrap())
+            .unwrap();
+    for key in [
+        "steps",
+        "t_end",
+        "solver",
+        "failures",
+        "max_penetration",
+        "max_joint_error",
+        "energy_initial",
+        "energy_final",
+        "wall_seconds",
+    ] {
+        assert!(summary.get(key).is_some(), "summary.json lacks {key}");
+    }
+    assert_eq!(summary["steps"], 300);
+    assert_eq!(summary["failures"], 0);
+    assert_eq!(summary["solver"], "lemke");
+}
