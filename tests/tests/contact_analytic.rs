@@ -90,6 +90,7 @@ fn sphere_rolls_down_incline_without_slip() {
     let (d4, _) = roll_down_incline(4e-3, 8);
     assert!(slip2 < 1e-6);
     let (err2, err4) = ((d2 - exact) / exact, (d4 - exact) / exact);
+    eprintln!("incline: {d1:.6} m at h = 1e-3 (error {err1:.2e}, slip {slip1:.1e} m/s), errors at 2h, 4h: {err2:.2e}, {err4:.2e}");
     for (ratio, what) in [(err2 / err1, "2h/h"), (err4 / err2, "4h/2h")] {
         assert!(
             (ratio - 2.0).abs() < 0.05,
@@ -136,6 +137,7 @@ fn sliding_sphere_starts_rolling_at_the_analytic_time() {
             lateral = lateral.max(b.x.dot(&Vector3::new(-dir.y, dir.x, 0.0)).abs());
         });
         let t = rolling_at.expect("never rolls");
+        eprintln!("slide at {deg} deg: rolls at {t:.4} s (exact {t_roll:.4}), lateral drift {lateral:.1e} m");
         assert!(
             (t - t_roll).abs() <= 2.0 * h,
             "{deg} deg: rolls at {t}, expected {t_roll}"
@@ -176,6 +178,7 @@ fn dropped_sphere_rebounds_to_e_squared_h() {
             }
         });
         assert!(bounced);
+        eprintln!("drop: h = {h}: first apex {apex:.5} m");
         assert!((apex - 0.25).abs() < 0.0025, "h = {h}: apex {apex} m");
     }
 }
