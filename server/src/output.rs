@@ -21,7 +21,7 @@ pub fn num(x: f64) -> String {
 
 pub const STATES_HEADER: &str = "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz";
 pub const IMPULSES_HEADER: &str = "step,t,kind,name,body_a,body_b,px,py,pz";
-pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,fallbacks,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total";
+pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total";
 
 /// The three CSV files of a run.
 pub struct Writers {
@@ -131,7 +131,7 @@ impl Writers {
             r.contacts_in_lcp.to_string(),
             r.active_contacts.to_string(),
             r.resolves.to_string(),
-            r.fallbacks.to_string(),
+            r.regularized.to_string(),
             num(r.max_penetration),
             num(r.max_joint_error),
             num(e.kinetic),

@@ -5,7 +5,7 @@ use cosim_server::engine::{Engine, Model};
 use cosim_server::scenes;
 
 /// Runs the reference scene for 10 s; returns every state (flattened) and
-/// the number of steps that fell back to the pruned set.
+/// the number of regularised solves.
 fn run_reference(h: f64, nd: usize, full: bool) -> (Vec<Vec<f64>>, usize) {
     let mut scene = scenes::reference().expect("built-in scene is valid");
     scene.sim.dt = h;
@@ -15,7 +15,7 @@ fn run_reference(h: f64, nd: usize, full: bool) -> (Vec<Vec<f64>>, usize) {
     assert_eq!(model.potential_contacts(), 7);
     let mut e = Engine::new(model);
     let steps = (10.0 / h).round() as u64;
-    let (mut states, mut fallbacks) = (Vec::new(), 0);
+    let (mut states, mut reg_full) = (Vec::new(), 0);
     for _ in 0..steps {
         let r = e.step();
         assert!(
@@ -24,10 +24,10 @@ fn run_reference(h: f64, nd: usize, full: bool) -> (Vec<Vec<f64>>, usize) {
             r.step,
             r.status()
         );
-        if full && r.fallbacks == 0 {
+        if full {
             assert_eq!(r.lcp_size, 7 * (2 + nd), "full LCP size at step {}", r.step);
         }
-        fallbacks += r.fallbacks;
+        reg_full += r.regularized;
         let s: Vec<f64> = e
             .state()
             .bodies
@@ -43,29 +43,29 @@ fn run_reference(h: f64, nd: usize, full: bool) -> (Vec<Vec<f64>>, usize) {
         assert!(s.iter().all(|x| x.is_finite()));
         states.push(s);
     }
-    (states, fallbacks)
+    (states, reg_full)
 }
 
 #[test]
 fn pruned_and_full_agree_and_lemke_never_fails() {
     for h in [1e-3, 1e-2] {
         for nd in [4, 8, 16] {
-            let (pruned, none) = run_reference(h, nd, false);
-            assert_eq!(none, 0, "the pruned problem never falls back");
-            let (full, fallbacks) = run_reference(h, nd, true);
+            let (pruned, reg_pruned) = run_reference(h, nd, false);
+            let (full, reg_full) = run_reference(h, nd, true);
             let worst = pruned
                 .iter()
                 .zip(&full)
                 .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
                 .fold(0.0, f64::max);
-            eprintln!("h = {h}, n_d = {nd}: {} steps, largest pruned-full difference {worst:e}, {fallbacks} fallbacks", pruned.len());
+            eprintln!("h = {h}, n_d = {nd}: {} steps, largest pruned-full difference {worst:e}, {reg_pruned} / {reg_full} regularised solves (pruned / full)", pruned.len());
             assert!(
                 worst <= 1e-9,
                 "h = {h}, n_d = {nd}: pruned and full differ by {worst}"
             );
+            // The regularised retry is the exception, not the rule.
             assert!(
-                fallbacks * 1000 <= pruned.len(),
-                "h = {h}, n_d = {nd}: {fallbacks} fallbacks"
+                (reg_pruned + reg_full) * 1000 <= pruned.len(),
+                "h = {h}, n_d = {nd}: too many regularised solves"
             );
         }
     }

@@ -72,7 +72,7 @@ struct Tally {
     pivots: u64,
     max_residual: f64,
     resolves: u64,
-    fallbacks: u64,
+    regularized: u64,
 }
 
 impl Tally {
@@ -83,7 +83,7 @@ impl Tally {
         self.pivots += r.pivots as u64;
         self.max_residual = self.max_residual.max(r.residual);
         self.resolves += r.resolves as u64;
-        self.fallbacks += r.fallbacks as u64;
+        self.regularized += r.regularized as u64;
         if let Some(e) = r.error {
             self.failures += 1;
             self.first_failure
@@ -178,7 +178,7 @@ fn simulate(model: Model, steps: u64, out: &std::path::Path, quiet: bool) -> std
         "pivots": tally.pivots,
         "max_residual": tally.max_residual,
         "resolves": tally.resolves,
-        "fallbacks_to_pruned": tally.fallbacks,
+        "regularized_solves": tally.regularized,
         "energy_initial": energy_initial.total,
         "energy_final": energy_final.total,
         "energy_midpoint_initial": energy_initial.midpoint,
@@ -217,7 +217,7 @@ fn simulate(model: Model, steps: u64, out: &std::path::Path, quiet: bool) -> std
                 "pruned LCP"
             }
         );
-        println!("LCP          largest {} unknowns, {} pivots in all, worst residual {:.1e}, {} re-solves, {} fallbacks to the pruned set", tally.max_lcp_size, tally.pivots, tally.max_residual, tally.resolves, tally.fallbacks);
+        println!("LCP          largest {} unknowns, {} pivots in all, worst residual {:.1e}, {} re-solves, {} regularised solves", tally.max_lcp_size, tally.pivots, tally.max_residual, tally.resolves, tally.regularized);
         println!(
             "failures     {}{}",
             tally.failures,

@@ -231,7 +231,7 @@ impl Engine {
             contacts_in_lcp: 0,
             active_contacts: 0,
             resolves: 0,
-            fallbacks: 0,
+            regularized: 0,
             max_penetration: 0.0,
             max_joint_error: 0.0,
             energy: Default::default(),
@@ -276,7 +276,7 @@ impl Engine {
         let t0 = Instant::now();
         applied::free_velocity(model, &self.state, &self.inputs, &ws.minv, &mut ws.nu_free);
         let p = &model.params;
-        prune::select(&mut ws.contacts, &self.state, &ws.nu_free, p, p.full);
+        prune::select(&mut ws.contacts, &self.state, &ws.nu_free, p);
         timings.assemble += t0.elapsed().as_secs_f64();
         let mut canonical = false;
         loop {
@@ -300,18 +300,9 @@ impl Engine {
                     m: &m.lcp_m,
                     q: &m.lcp_q,
                 };
-                let info = match self.lemke.solve(&lcp, &mut m.z) {
-                    Ok(info) => info,
-                    Err(e) => {
-                        if p.full && report.fallbacks == 0 {
-                            report.fallbacks += 1;
-                            prune::select(&mut ws.contacts, &self.state, &ws.nu_free, p, false);
-                            continue;
-                        }
-                        return Err(StepError::Lemke(e));
-                    }
-                };
+                let info = self.lemke.solve(&lcp, &mut m.z).map_err(StepError::Lemke)?;
                 report.pivots += info.work;
+                report.regularized += usize::from(info.regularized);
                 report.residual = report.residual.max(info.residual);
                 report.lcp_size = report.lcp_size.max(n);
                 report.contacts_in_lcp = report.contacts_in_lcp.max(m.nc);

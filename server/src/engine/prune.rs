@@ -18,15 +18,6 @@
 //! active contacts alone: the final LCP then depends only on the active set,
 //! whatever was pruned, and pruned and full runs give the same bits.
 //! The velocity check still runs after that solve.
-//!
-//! The full problem (`--full`) is the hardest for Lemke: every far contact
-//! brings a degenerate block (zero impulse, slack at its sliding speed), and
-//! near-ties decided by round-off can end on a ray although a solution exists
-//! (seen at h = 1e-2, n_d = 16 in the reference scene: a solution exists, as
-//! exact rational arithmetic shows). A solution of the pruned problem that
-//! passes the velocity check is a solution of the full one (far contacts
-//! take zero impulse and a slack equal to their sliding speed), so the step
-//! then falls back to the pruned selection and says so in its report.
 
 use super::contact::Contact;
 use super::model::Params;
@@ -35,14 +26,8 @@ use super::state::State;
 use nalgebra::Vector3;
 
 /// Marks the contacts that enter the LCP before the first solve: all of
-/// them when `keep_all`, else those that could close within the step.
-pub fn select(
-    contacts: &mut [Contact],
-    state: &State,
-    nu_free: &[f64],
-    p: &Params,
-    keep_all: bool,
-) {
+/// them with `--full`, else those that could close within the step.
+pub fn select(contacts: &mut [Contact], state: &State, nu_free: &[f64], p: &Params) {
     // Largest linear speed of each body over the step (start or free). The
     // gap of a sphere depends on its centre only, so spin does not enter.
     let speed = |i: usize| {
@@ -50,7 +35,7 @@ pub fn select(
         state.bodies[i].v.norm().max(free.norm())
     };
     for c in contacts.iter_mut() {
-        c.in_lcp = keep_all || {
+        c.in_lcp = p.full || {
             let mut s = speed(c.geom.a);
             if let super::collision::Counterpart::Body(j) = c.geom.b {
                 s += speed(j);

@@ -68,9 +68,9 @@ pub struct StepReport {
     pub active_contacts: usize,
     /// Left-out contacts that the velocity check added back (re-solves).
     pub resolves: usize,
-    /// 1 when Lemke failed on the full problem (`--full`) and the step was
-    /// solved on the pruned contact set instead (see prune.rs).
-    pub fallbacks: usize,
+    /// Solves of the step that needed Lemke's regularised retry (see
+    /// `solver::lemke`): their residual is up to 1e-6 instead of 1e-8.
+    pub regularized: usize,
     pub max_penetration: f64,
     pub max_joint_error: f64,
     pub energy: Energy,

@@ -22,6 +22,8 @@ pub struct Lcp<'a> {
 pub struct SolveInfo {
     /// Pivots (Lemke) or iterations (iterative solvers).
     pub work: usize,
+    /// The answer came from a regularised retry (Lemke on `M + eps I`).
+    pub regularized: bool,
     /// Natural-map residual relative to `||q||` (see [`relative_residual`]).
     pub residual: f64,
 }
