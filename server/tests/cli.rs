@@ -1,30 +1,11 @@
 //! The command line: validation errors (acceptance 10) and the output files.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::TempDir;
 use std::process::{Command, Output};
 
 const BIN: &str = env!("CARGO_BIN_EXE_cosim-server");
-
-/// A folder of its own for one test, removed when dropped (also on panic).
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> TempDir {
-        let dir = std::env::temp_dir().join(format!("cosim-cli-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).expect("temp dir");
-        TempDir(dir)
-    }
-    fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 fn run(args: &[&str]) -> Output {
     Command::new(BIN)
@@ -141,7 +122,7 @@ const CASES: &[(&str, &str, &str, &str, Option<usize>)] = &[
 
 #[test]
 fn every_validation_case_exits_2_naming_the_field() {
-    let dir = TempDir::new("validation");
+    let dir = TempDir::new("cli-validation");
     // The good scene runs.
     let good = dir.path().join("good.toml");
     std::fs::write(&good, GOOD).unwrap();
@@ -211,7 +192,7 @@ fn bad_options_exit_2_naming_the_option() {
 
 #[test]
 fn reference_run_writes_every_file() {
-    let dir = TempDir::new("reference");
+    let dir = TempDir::new("cli-reference");
     let out_dir = dir.path().join("out");
     let out = run(&["run", "--steps", "300", "--out", out_dir.to_str().unwrap()]);
     assert!(

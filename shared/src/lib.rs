@@ -5,5 +5,5 @@
 pub mod scene;
 
 pub use scene::{
-    BodyDesc, JointDesc, JointKind, PlaneDesc, Scene, SceneError, SimDesc, SolverChoice,
+    BodyDesc, CameraDesc, JointDesc, JointKind, PlaneDesc, Scene, SceneError, SimDesc, SolverChoice,
 };

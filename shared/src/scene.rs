@@ -5,7 +5,7 @@
 //! path such as `body[1].mass` or `body "ball".mass`), the offending value and,
 //! for syntax errors, the line and column that TOML reports.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::Path;
 
@@ -20,7 +20,7 @@ pub const DEFAULT_RESTITUTION_THRESHOLD: f64 = 1e-2;
 pub const DEFAULT_CONTACT_MARGIN: f64 = 1e-3;
 
 /// A whole scene file.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     pub sim: SimDesc,
@@ -30,10 +30,28 @@ pub struct Scene {
     pub planes: Vec<PlaneDesc>,
     #[serde(default, rename = "joint")]
     pub joints: Vec<JointDesc>,
+    /// The animation's camera; framed automatically when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<CameraDesc>,
+}
+
+/// `[camera]`: overrides the animation's automatic framing.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    /// Direction from the scene towards the camera (orthographic view).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction: Option<[f64; 3]>,
+    /// World point at the centre of the picture.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target: Option<[f64; 3]>,
+    /// Width of the world shown across the picture (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<f64>,
 }
 
 /// Which LCP solver runs the step.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum SolverChoice {
     /// Schur-complement reduction to a pure LCP, solved by Lemke's algorithm.
@@ -60,16 +78,19 @@ impl std::str::FromStr for SolverChoice {
 }
 
 /// `[sim]`: the time stepping.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SimDesc {
     /// Scene name (output folder `out/<name>`); defaults to the file stem.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// Step `h` in seconds.
     pub dt: f64,
     /// Simulated seconds for `run` (give this or `steps`).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub duration: Option<f64>,
     /// Number of steps for `run` (give this or `duration`).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub steps: Option<u64>,
     #[serde(default = "default_gravity")]
     pub gravity: [f64; 3],
@@ -106,7 +127,7 @@ fn default_contact_margin() -> f64 {
 }
 
 /// `[[body]]`: a solid sphere.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BodyDesc {
     pub name: String,
@@ -135,7 +156,7 @@ fn identity_quaternion() -> [f64; 4] {
 
 /// `[[plane]]`: a fixed infinite plane; bodies stay on the side its normal
 /// points to.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct PlaneDesc {
     pub name: String,
@@ -147,14 +168,14 @@ pub struct PlaneDesc {
     pub restitution: f64,
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum JointKind {
     Spherical,
 }
 
 /// `[[joint]]`: a bilateral joint between two bodies or a body and the world.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct JointDesc {
     pub name: String,
@@ -220,6 +241,11 @@ impl Scene {
             scene.sim.name = path.file_stem().map(|s| s.to_string_lossy().into_owned());
         }
         Ok(scene)
+    }
+
+    /// The scene as TOML text (with every default written out).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).unwrap_or_default()
     }
 
     /// Parses and validates scene text; `file` only labels the errors.
@@ -370,6 +396,23 @@ impl Scene {
             finite3(&j.anchor).map_err(|m| err(f("anchor"), m))?;
             finite3(&j.torque).map_err(|m| err(f("torque"), m))?;
         }
+        if let Some(c) = &self.camera {
+            if let Some(d) = &c.direction {
+                finite3(d).map_err(|m| err("camera.direction".into(), m))?;
+                if d.iter().map(|x| x * x).sum::<f64>() <= 1e-24 {
+                    return Err(err(
+                        "camera.direction".into(),
+                        format!("= {d:?}: must not be zero"),
+                    ));
+                }
+            }
+            if let Some(t) = &c.target {
+                finite3(t).map_err(|m| err("camera.target".into(), m))?;
+            }
+            if let Some(w) = c.width {
+                positive(w).map_err(|m| err("camera.width".into(), m))?;
+            }
+        }
         Ok(())
     }
 }
@@ -496,6 +539,8 @@ position = [0.0, 0.0, 0.5]
         assert_eq!(s.sim.gravity, [0.0, 0.0, -9.81]);
         assert_eq!(s.bodies[0].orientation, [1.0, 0.0, 0.0, 0.0]);
         assert_eq!(s.step_count(), 1000);
+        // Written out and read back, it is the same scene.
+        assert_eq!(Scene::parse(&s.to_toml(), "again.toml"), Ok(s));
     }
 
     #[test]

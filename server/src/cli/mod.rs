@@ -22,6 +22,18 @@ pub enum Command {
     /// Run a scene (the built-in reference scene without SCENE) and write
     /// states.csv, impulses.csv, steps.csv and summary.json.
     Run(RunArgs),
+    /// Draw the figures (DIR/plots/) and the animation (DIR/animation.gif)
+    /// of an earlier run from its files.
+    Plot(PlotArgs),
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct PlotArgs {
+    /// Output folder of a run (holding scene.toml and the CSV files).
+    pub dir: PathBuf,
+    /// Also write N evenly spread frames of the animation as PNG stills.
+    #[arg(long, default_value_t = 0)]
+    pub stills: usize,
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -52,6 +64,12 @@ pub struct RunArgs {
     /// Print nothing but errors.
     #[arg(long)]
     pub quiet: bool,
+    /// Draw the figures into DIR/plots/ (PNG and SVG).
+    #[arg(long)]
+    pub plot: bool,
+    /// Write DIR/animation.gif.
+    #[arg(long)]
+    pub animate: bool,
 }
 
 /// Exit code for bad input (a scene or an option), as clap uses.
@@ -70,5 +88,6 @@ pub fn main() -> ExitCode {
         .init();
     match cli.command {
         Command::Run(args) => run::run(&args),
+        Command::Plot(args) => run::plot(&args),
     }
 }

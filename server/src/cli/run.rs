@@ -1,8 +1,9 @@
 //! `cosim-server run`.
 
-use super::{RunArgs, EXIT_BAD_INPUT, EXIT_FAILED};
+use super::{PlotArgs, RunArgs, EXIT_BAD_INPUT, EXIT_FAILED};
 use crate::engine::{Engine, Model, StepReport};
 use crate::output::{num, Writers};
+use crate::plot::{self, PlotOptions};
 use cosim_shared::{Scene, SceneError};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -106,12 +107,68 @@ pub fn run(args: &RunArgs) -> ExitCode {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(scene.name()));
-    match simulate(model, scene.step_count(), &out, args.quiet) {
-        Ok(true) => ExitCode::SUCCESS,
-        Ok(false) => ExitCode::from(EXIT_FAILED),
+    // The scene as run (overrides applied) goes with the outputs, so that
+    // `plot` and later tools can read the run from its folder alone.
+    let written = std::fs::create_dir_all(&out)
+        .and_then(|_| std::fs::write(out.join("scene.toml"), scene.to_toml()));
+    if let Err(e) = written {
+        eprintln!(
+            "error: cannot write {}: {e}",
+            out.join("scene.toml").display()
+        );
+        return ExitCode::from(EXIT_FAILED);
+    }
+    let ok = match simulate(model, scene.step_count(), &out, args.quiet) {
+        Ok(ok) => ok,
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::from(EXIT_FAILED)
+            return ExitCode::from(EXIT_FAILED);
+        }
+    };
+    if args.plot || args.animate {
+        let opts = PlotOptions {
+            figures: args.plot,
+            animation: args.animate,
+            stills: 0,
+        };
+        if let Err(code) = draw(&out, opts, args.quiet) {
+            return code;
+        }
+    }
+    if ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(EXIT_FAILED)
+    }
+}
+
+/// `cosim-server plot DIR`.
+pub fn plot(args: &PlotArgs) -> ExitCode {
+    let opts = PlotOptions {
+        figures: true,
+        animation: true,
+        stills: args.stills,
+    };
+    match draw(&args.dir, opts, false) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(code) => code,
+    }
+}
+
+fn draw(dir: &std::path::Path, opts: PlotOptions, quiet: bool) -> Result<(), ExitCode> {
+    match plot::render(dir, opts) {
+        Ok(files) => {
+            if !quiet {
+                println!("figures      {} files in {}", files.len(), dir.display());
+            }
+            Ok(())
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            Err(ExitCode::from(match e {
+                plot::PlotError::Read(_) => EXIT_BAD_INPUT,
+                plot::PlotError::Draw(_) => EXIT_FAILED,
+            }))
         }
     }
 }

@@ -1,0 +1,372 @@
+//! The animation: an orthographic view of the scene as a GIF that plays at
+//! real time (frames skipped as needed), the simulated time in a corner.
+//! Planes are shaded patches, spheres shaded discs with a body-fixed dot (so
+//! rolling and spinning show), joints dark links from each body's centre to
+//! the anchor.
+
+use super::data::RunData;
+use super::{color, PlotError, FONT};
+use crate::engine::model::{Attachment, Model, Shape};
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use plotters::prelude::*;
+use std::path::Path;
+
+pub const WIDTH: u32 = 640;
+pub const HEIGHT: u32 = 480;
+/// Frames per second of simulated time at real-time playback.
+pub const FPS: f64 = 25.0;
+/// Most frames in one GIF; longer runs show fewer frames per second, each
+/// held longer, so playback stays at real time.
+pub const MAX_FRAMES: usize = 750;
+
+/// An orthographic camera: screen x along `right`, y along `up`, depth along
+/// `forward`; `scale` pixels per metre about `target`.
+#[derive(Debug, Clone, Copy)]
+pub struct Camera {
+    pub target: Vector3<f64>,
+    pub right: Vector3<f64>,
+    pub up: Vector3<f64>,
+    pub forward: Vector3<f64>,
+    pub scale: f64,
+}
+
+impl Camera {
+    /// Pixel coordinates of a world point.
+    pub fn project(&self, p: &Vector3<f64>) -> (f64, f64) {
+        let d = p - self.target;
+        (
+            WIDTH as f64 / 2.0 + self.scale * d.dot(&self.right),
+            HEIGHT as f64 / 2.0 - self.scale * d.dot(&self.up),
+        )
+    }
+
+    /// Distance along the view direction (larger: farther).
+    pub fn depth(&self, p: &Vector3<f64>) -> f64 {
+        (p - self.target).dot(&self.forward)
+    }
+
+    /// The camera of a run: the scene's `[camera]` where given, else framed
+    /// on every position the bodies take.
+    pub fn frame(
+        model: &Model,
+        camera: Option<&cosim_shared::CameraDesc>,
+        run: &RunData,
+    ) -> Camera {
+        // By default look in from the open side: along the sum of the
+        // planes' normals (into a corner or a trough), raised a little.
+        let g = model.params.gravity;
+        let world_up = if g.norm() > 0.0 {
+            -g.normalize()
+        } else {
+            Vector3::z()
+        };
+        let open: Vector3<f64> = model.planes.iter().map(|p| p.normal).sum();
+        let default = if open.norm() > 1e-6 {
+            open.normalize()
+        } else {
+            Vector3::new(1.0, -1.6, 0.9).normalize()
+        };
+        let default = {
+            let d =
+                default + world_up * 0.5 + crate::engine::contact::perpendicular(&world_up) * 0.15;
+            d.normalize()
+        };
+        let dir = camera
+            .and_then(|c| c.direction)
+            .map(Vector3::from)
+            .unwrap_or(default)
+            .normalize();
+        let forward = -dir;
+        let right = {
+            let r = forward.cross(&world_up);
+            if r.norm() > 1e-9 {
+                r.normalize()
+            } else {
+                crate::engine::contact::perpendicular(&forward)
+            }
+        };
+        let up = right.cross(&forward);
+        // Bounding box of the bodies over the run, radius included.
+        let (mut lo, mut hi) = (
+            Vector3::repeat(f64::INFINITY),
+            Vector3::repeat(f64::NEG_INFINITY),
+        );
+        for (b, track) in model.bodies.iter().zip(&run.bodies) {
+            let Shape::Sphere { radius } = b.shape;
+            for r in &track.rows {
+                let x = Vector3::new(r[0], r[1], r[2]);
+                lo = lo.inf(&(x - Vector3::repeat(radius)));
+                hi = hi.sup(&(x + Vector3::repeat(radius)));
+            }
+        }
+        if !lo.x.is_finite() {
+            (lo, hi) = (Vector3::repeat(-1.0), Vector3::repeat(1.0));
+        }
+        let target = camera
+            .and_then(|c| c.target)
+            .map(Vector3::from)
+            .unwrap_or((lo + hi) / 2.0);
+        let scale = match camera.and_then(|c| c.width) {
+            Some(w) => WIDTH as f64 / w,
+            None => {
+                // Fit the projected box, with room around it.
+                let (mut w, mut h) = (0.0f64, 0.0f64);
+                for k in 0..8 {
+                    let c = Vector3::new(
+                        if k & 1 == 0 { lo.x } else { hi.x },
+                        if k & 2 == 0 { lo.y } else { hi.y },
+                        if k & 4 == 0 { lo.z } else { hi.z },
+                    ) - target;
+                    w = w.max(2.0 * c.dot(&right).abs());
+                    h = h.max(2.0 * c.dot(&up).abs());
+                }
+                0.8 * (WIDTH as f64 / w.max(1e-6)).min(HEIGHT as f64 / h.max(1e-6))
+            }
+        };
+        Camera {
+            target,
+            right,
+            up,
+            forward,
+            scale,
+        }
+    }
+}
+
+/// Which recorded state each frame shows, and the delay per frame (ms).
+pub fn frames(run: &RunData) -> (Vec<usize>, u32) {
+    let t_end = run.t.last().copied().unwrap_or(0.0);
+    let mut interval = 1.0 / FPS;
+    while t_end / interval > MAX_FRAMES as f64 {
+        interval *= 2.0;
+    }
+    let mut out = Vec::new();
+    let mut k = 0usize;
+    let mut i = 0usize;
+    loop {
+        let t = k as f64 * interval;
+        if t > t_end + 1e-12 {
+            break;
+        }
+        while i + 1 < run.t.len() && run.t[i + 1] <= t + 1e-12 {
+            i += 1;
+        }
+        out.push(i);
+        k += 1;
+    }
+    (out, (interval * 1000.0).round() as u32)
+}
+
+/// World position of the body-fixed marker of body `b` in state row `r`.
+pub fn marker(radius: f64, r: &[f64; 13]) -> Vector3<f64> {
+    let q = UnitQuaternion::from_quaternion(Quaternion::new(r[3], r[4], r[5], r[6]));
+    Vector3::new(r[0], r[1], r[2]) + q.transform_vector(&Vector3::x()) * (0.8 * radius)
+}
+
+fn shade(c: RGBColor, f: f64) -> RGBColor {
+    let m = |x: u8| ((x as f64) * f).round().clamp(0.0, 255.0) as u8;
+    RGBColor(m(c.0), m(c.1), m(c.2))
+}
+
+fn lighten(c: RGBColor, f: f64) -> RGBColor {
+    let m = |x: u8| (x as f64 + (255.0 - x as f64) * f).round() as u8;
+    RGBColor(m(c.0), m(c.1), m(c.2))
+}
+
+/// Sutherland-Hodgman: the part of a convex polygon with `n . x >= offset`.
+fn clip(poly: &[Vector3<f64>], n: &Vector3<f64>, offset: f64) -> Vec<Vector3<f64>> {
+    let mut out = Vec::with_capacity(poly.len() + 1);
+    for (i, a) in poly.iter().enumerate() {
+        let b = &poly[(i + 1) % poly.len()];
+        let (da, db) = (n.dot(a) - offset, n.dot(b) - offset);
+        if da >= 0.0 {
+            out.push(*a);
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            out.push(a + (b - a) * (da / (da - db)));
+        }
+    }
+    out
+}
+
+/// Draws frame showing state `i` of the run.
+fn draw_frame<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    model: &Model,
+    run: &RunData,
+    cam: &Camera,
+    i: usize,
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    area.fill(&RGBColor(250, 250, 248)).map_err(e)?;
+    let pix = |p: &Vector3<f64>| {
+        let (x, y) = cam.project(p);
+        (x.round() as i32, y.round() as i32)
+    };
+    let centre = |b: usize| {
+        let r = &run.bodies[b].rows[i];
+        Vector3::new(r[0], r[1], r[2])
+    };
+
+    // Planes: a square patch around the point nearest the view's target,
+    // cut to the side of every other plane that the bodies are on (so a
+    // corner shows as a corner), farthest first, shaded by how squarely it
+    // faces the camera.
+    let half = (WIDTH.max(HEIGHT) as f64) / cam.scale;
+    let mut patches: Vec<(f64, u8, Vec<Vector3<f64>>)> = Vec::new();
+    for (k, p) in model.planes.iter().enumerate() {
+        let p0 = cam.target - p.normal * (p.normal.dot(&cam.target) - p.offset);
+        let t1 = crate::engine::contact::perpendicular(&p.normal);
+        let t2 = p.normal.cross(&t1);
+        let mut poly: Vec<Vector3<f64>> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+            .iter()
+            .map(|(a, b)| p0 + t1 * (a * half) + t2 * (b * half))
+            .collect();
+        for (l, other) in model.planes.iter().enumerate() {
+            if l != k {
+                poly = clip(&poly, &other.normal, other.offset);
+            }
+        }
+        if poly.len() >= 3 {
+            let centroid = poly.iter().sum::<Vector3<f64>>() / poly.len() as f64;
+            let facing = p.normal.dot(&-cam.forward).abs();
+            patches.push((cam.depth(&centroid), (175.0 + 60.0 * facing) as u8, poly));
+        }
+    }
+    patches.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for (_, grey, poly) in &patches {
+        let corners: Vec<(i32, i32)> = poly.iter().map(pix).collect();
+        area.draw(&Polygon::new(
+            corners.clone(),
+            RGBColor(*grey, *grey, grey - 8).filled(),
+        ))
+        .map_err(e)?;
+        let mut outline = corners;
+        outline.push(outline[0]);
+        area.draw(&PathElement::new(
+            outline,
+            RGBColor(150, 150, 145).stroke_width(1),
+        ))
+        .map_err(e)?;
+    }
+
+    // Joints: links from each body's centre to the anchor, under the spheres.
+    for j in &model.joints {
+        let anchor = match j.a {
+            Attachment::World => j.local_a,
+            Attachment::Body(a) => {
+                let r = &run.bodies[a].rows[i];
+                let q = UnitQuaternion::from_quaternion(Quaternion::new(r[3], r[4], r[5], r[6]));
+                centre(a) + q.transform_vector(&j.local_a)
+            }
+        };
+        let mut path = Vec::new();
+        if let Attachment::Body(a) = j.a {
+            path.push(pix(&centre(a)));
+        }
+        path.push(pix(&anchor));
+        if let Attachment::Body(b) = j.b {
+            path.push(pix(&centre(b)));
+        }
+        area.draw(&PathElement::new(
+            path,
+            RGBColor(60, 60, 60).stroke_width(3),
+        ))
+        .map_err(e)?;
+        let (ax, ay) = pix(&anchor);
+        area.draw(&Circle::new((ax, ay), 4, RGBColor(40, 40, 40).filled()))
+            .map_err(e)?;
+    }
+
+    // Spheres, farthest first.
+    let mut order: Vec<usize> = (0..model.bodies.len()).collect();
+    order.sort_by(|&a, &b| cam.depth(&centre(b)).total_cmp(&cam.depth(&centre(a))));
+    for b in order {
+        let Shape::Sphere { radius } = model.bodies[b].shape;
+        let c = centre(b);
+        let (x, y) = pix(&c);
+        let rp = (radius * cam.scale).round().max(2.0) as i32;
+        let base = color(b);
+        area.draw(&Circle::new((x, y), rp, shade(base, 0.7).filled()))
+            .map_err(e)?;
+        area.draw(&Circle::new(
+            (x, y),
+            (rp as f64 * 0.9) as i32,
+            base.filled(),
+        ))
+        .map_err(e)?;
+        // Highlight towards the upper left, clear of the centre.
+        let off = (0.45 * rp as f64) as i32;
+        area.draw(&Circle::new(
+            (x - off, y - off),
+            (0.3 * rp as f64) as i32,
+            lighten(base, 0.45).filled(),
+        ))
+        .map_err(e)?;
+        // The body-fixed dot, when on the visible half.
+        let m = marker(radius, &run.bodies[b].rows[i]);
+        if cam.depth(&m) < cam.depth(&c) {
+            let (mx, my) = pix(&m);
+            area.draw(&Circle::new(
+                (mx, my),
+                (0.14 * rp as f64).max(2.0) as i32,
+                RGBColor(20, 20, 20).filled(),
+            ))
+            .map_err(e)?;
+        }
+    }
+    area.draw(&Text::new(
+        format!("t = {:.3} s", run.t[i]),
+        (12, 10),
+        (FONT, 20).into_font().color(&BLACK),
+    ))
+    .map_err(e)?;
+    Ok(())
+}
+
+/// Writes `animation.gif`; returns the number of frames.
+pub fn gif(
+    model: &Model,
+    camera: Option<&cosim_shared::CameraDesc>,
+    run: &RunData,
+    path: &Path,
+) -> Result<usize, PlotError> {
+    let cam = Camera::frame(model, camera, run);
+    let (frames, delay) = frames(run);
+    let fail = |m: String| PlotError::Draw(format!("{}: {m}", path.display()));
+    let area = BitMapBackend::gif(path, (WIDTH, HEIGHT), delay)
+        .map_err(|e| fail(e.to_string()))?
+        .into_drawing_area();
+    for &i in &frames {
+        draw_frame(&area, model, run, &cam, i).map_err(fail)?;
+        area.present().map_err(|e| fail(e.to_string()))?;
+    }
+    Ok(frames.len())
+}
+
+/// Writes `count` frames, evenly spread over the run, as PNG stills
+/// `<stem>_<k>.png` (for documentation).
+pub fn stills(
+    model: &Model,
+    camera: Option<&cosim_shared::CameraDesc>,
+    run: &RunData,
+    dir: &Path,
+    stem: &str,
+    count: usize,
+) -> Result<Vec<std::path::PathBuf>, PlotError> {
+    let cam = Camera::frame(model, camera, run);
+    let (frames, _) = frames(run);
+    let mut out = Vec::new();
+    for k in 0..count {
+        let i = frames[(k * (frames.len() - 1)) / count.saturating_sub(1).max(1)];
+        let path = dir.join(format!("{stem}_{k}.png"));
+        {
+            let area = BitMapBackend::new(&path, (WIDTH, HEIGHT)).into_drawing_area();
+            let fail = |m: String| PlotError::Draw(format!("{}: {m}", path.display()));
+            draw_frame(&area, model, run, &cam, i).map_err(fail)?;
+            area.present().map_err(|e| fail(e.to_string()))?;
+        }
+        out.push(path);
+    }
+    Ok(out)
+}

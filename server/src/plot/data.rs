@@ -1,0 +1,143 @@
+//! Reads a run's files back (`scene.toml`, `states.csv`, `impulses.csv`,
+//! `steps.csv`): plots are drawn from the files alone, so a recording made
+//! during a co-simulation is drawn exactly like an offline run.
+
+use super::PlotError;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// One body's trajectory, one entry per recorded step.
+#[derive(Debug, Clone, Default)]
+pub struct BodyTrack {
+    pub name: String,
+    /// `[x, y, z, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz]` per step.
+    pub rows: Vec<[f64; 13]>,
+}
+
+/// Everything a figure or the animation needs.
+#[derive(Debug, Clone, Default)]
+pub struct RunData {
+    /// Time of each recorded state (step 0 first).
+    pub t: Vec<f64>,
+    pub bodies: Vec<BodyTrack>,
+    /// `steps.csv` columns by name, one value per step (steps 1..).
+    pub steps: BTreeMap<String, Vec<f64>>,
+    /// Time of each step report.
+    pub step_t: Vec<f64>,
+    /// Impulse series by `(kind, name)`: one impulse vector per step
+    /// (index `step - 1`), zero where the file has no row.
+    pub impulses: BTreeMap<(String, String), Vec<[f64; 3]>>,
+}
+
+fn read(dir: &Path, name: &str) -> Result<String, PlotError> {
+    let path = dir.join(name);
+    std::fs::read_to_string(&path).map_err(|e| PlotError::Read(format!("{}: {e}", path.display())))
+}
+
+fn parse(path: &str, line: usize, field: &str, text: &str) -> Result<f64, PlotError> {
+    text.trim()
+        .parse::<f64>()
+        .map_err(|_| PlotError::Read(format!("{path}:{line}: {field} = {text:?} is not a number")))
+}
+
+impl RunData {
+    pub fn load(dir: &Path) -> Result<RunData, PlotError> {
+        let mut data = RunData::default();
+        let states = read(dir, "states.csv")?;
+        let mut body_index: BTreeMap<String, usize> = BTreeMap::new();
+        for (k, line) in states.lines().enumerate().skip(1) {
+            let cols: Vec<&str> = line.split(',').collect();
+            if cols.len() != 16 {
+                // A run stopped mid-write leaves at most one partial last line.
+                continue;
+            }
+            let step = parse("states.csv", k + 1, "step", cols[0])? as usize;
+            let t = parse("states.csv", k + 1, "t", cols[1])?;
+            let name = cols[2].to_string();
+            let i = *body_index.entry(name.clone()).or_insert_with(|| {
+                data.bodies.push(BodyTrack {
+                    name,
+                    rows: Vec::new(),
+                });
+                data.bodies.len() - 1
+            });
+            let mut row = [0.0; 13];
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = parse("states.csv", k + 1, "state", cols[3 + j])?;
+            }
+            if data.t.len() <= step {
+                data.t.push(t);
+            }
+            data.bodies[i].rows.push(row);
+        }
+        // Keep only the steps every body has (a partial last step is cut).
+        let n = data.bodies.iter().map(|b| b.rows.len()).min().unwrap_or(0);
+        data.t.truncate(n);
+        for b in &mut data.bodies {
+            b.rows.truncate(n);
+        }
+        if n == 0 {
+            return Err(PlotError::Read(format!(
+                "{}: no states",
+                dir.join("states.csv").display()
+            )));
+        }
+
+        let steps = read(dir, "steps.csv")?;
+        let mut lines = steps.lines();
+        let header: Vec<String> = lines
+            .next()
+            .unwrap_or("")
+            .split(',')
+            .map(str::to_string)
+            .collect();
+        for (k, line) in lines.enumerate() {
+            let cols: Vec<&str> = line.split(',').collect();
+            if cols.len() != header.len() {
+                continue;
+            }
+            for (name, v) in header.iter().zip(&cols) {
+                if let Ok(x) = v.parse::<f64>() {
+                    data.steps.entry(name.clone()).or_default().push(x);
+                } else if name != "solver" && name != "status" {
+                    return Err(PlotError::Read(format!(
+                        "steps.csv:{}: {name} = {v:?} is not a number",
+                        k + 2
+                    )));
+                }
+            }
+        }
+        data.step_t = data.steps.get("t").cloned().unwrap_or_default();
+
+        let nsteps = data.step_t.len();
+        let impulses = read(dir, "impulses.csv")?;
+        for (k, line) in impulses.lines().enumerate().skip(1) {
+            let cols: Vec<&str> = line.split(',').collect();
+            if cols.len() != 9 {
+                continue;
+            }
+            let step = parse("impulses.csv", k + 1, "step", cols[0])? as usize;
+            if step == 0 || step > nsteps {
+                continue;
+            }
+            let mut p = [0.0; 3];
+            for (j, v) in p.iter_mut().enumerate() {
+                *v = parse("impulses.csv", k + 1, "impulse", cols[6 + j])?;
+            }
+            let series = data
+                .impulses
+                .entry((cols[2].to_string(), cols[3].to_string()))
+                .or_insert_with(|| vec![[0.0; 3]; nsteps]);
+            series[step - 1] = p;
+        }
+        Ok(data)
+    }
+
+    /// The `steps.csv` column `name` against time.
+    pub fn step_series(&self, name: &str) -> Vec<(f64, f64)> {
+        self.steps
+            .get(name)
+            .map(|v| self.step_t.iter().copied().zip(v.iter().copied()).collect())
+            .unwrap_or_default()
+    }
+}

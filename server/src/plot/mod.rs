@@ -1,0 +1,117 @@
+//! Figures and the animation of a run, drawn from its output files.
+
+pub mod animation;
+pub mod data;
+pub mod figures;
+
+use crate::engine::Model;
+use cosim_shared::Scene;
+use plotters::prelude::RGBColor;
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+/// The font family the figures use: DejaVu Sans, embedded in the binary
+/// (`assets/`), so that text renders on a machine without any font.
+pub const FONT: &str = "sans-serif";
+static FONT_BYTES: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+
+fn register_font() -> Result<(), PlotError> {
+    static ONCE: Once = Once::new();
+    let mut ok = true;
+    ONCE.call_once(|| {
+        ok = plotters::style::register_font(FONT, plotters::style::FontStyle::Normal, FONT_BYTES)
+            .is_ok();
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err(PlotError::Draw("the embedded font does not load".into()))
+    }
+}
+
+/// Colour `i` of the palette (Tableau 10): bodies, contacts and joints.
+pub fn color(i: usize) -> RGBColor {
+    const PALETTE: [RGBColor; 10] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+        RGBColor(188, 189, 34),
+        RGBColor(23, 190, 207),
+    ];
+    PALETTE[i % PALETTE.len()]
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum PlotError {
+    /// A run file is missing or malformed.
+    Read(String),
+    /// Drawing or writing a figure failed.
+    Draw(String),
+}
+
+impl std::fmt::Display for PlotError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PlotError::Read(m) => write!(f, "cannot read the run: {m}"),
+            PlotError::Draw(m) => write!(f, "cannot draw: {m}"),
+        }
+    }
+}
+
+impl std::error::Error for PlotError {}
+
+/// What to draw.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PlotOptions {
+    pub figures: bool,
+    pub animation: bool,
+    /// PNG stills of the animation (0: none).
+    pub stills: usize,
+}
+
+/// Draws the figures (into `DIR/plots/`) and the animation
+/// (`DIR/animation.gif`) of the run in `dir`; returns the files written.
+pub fn render(dir: &Path, opts: PlotOptions) -> Result<Vec<PathBuf>, PlotError> {
+    register_font()?;
+    let run = data::RunData::load(dir)?;
+    let mut files = Vec::new();
+    if opts.figures {
+        let plots = dir.join("plots");
+        std::fs::create_dir_all(&plots)
+            .map_err(|e| PlotError::Draw(format!("{}: {e}", plots.display())))?;
+        files.extend(figures::all(&run, &plots)?);
+    }
+    if opts.animation || opts.stills > 0 {
+        let scene =
+            Scene::load(&dir.join("scene.toml")).map_err(|e| PlotError::Read(e.to_string()))?;
+        let model = Model::from_scene(&scene);
+        if model.bodies.len() != run.bodies.len() {
+            return Err(PlotError::Read(format!(
+                "scene.toml has {} bodies, states.csv {}",
+                model.bodies.len(),
+                run.bodies.len()
+            )));
+        }
+        if opts.animation {
+            let path = dir.join("animation.gif");
+            animation::gif(&model, scene.camera.as_ref(), &run, &path)?;
+            files.push(path);
+        }
+        if opts.stills > 0 {
+            files.extend(animation::stills(
+                &model,
+                scene.camera.as_ref(),
+                &run,
+                dir,
+                "frame",
+                opts.stills,
+            )?);
+        }
+    }
+    Ok(files)
+}
