@@ -2,6 +2,7 @@
 //! built-in scenes, the output writers and the command line.
 
 pub mod cli;
+pub mod corpus;
 pub mod engine;
 pub mod output;
 pub mod plot;

@@ -1,5 +1,6 @@
 //! The command line: `cosim-server run [SCENE] ...`.
 
+mod lcp;
 mod run;
 
 use clap::{Parser, Subcommand};
@@ -25,6 +26,19 @@ pub enum Command {
     /// Draw the figures (DIR/plots/) and the animation (DIR/animation.gif)
     /// of an earlier run from its files.
     Plot(PlotArgs),
+    /// Solve a Siconos LCP file (or mixed LCP, `*_mlcp.dat`) with Lemke and
+    /// print the outcome.
+    Lcp(LcpArgs),
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct LcpArgs {
+    /// The problem file (Siconos format, see ../shared/data/README.md).
+    pub file: PathBuf,
+    /// Print one JSON object: status (solved, ray_termination, pivot_limit,
+    /// singular, not_converged), solver, pivots, residual, z.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -89,5 +103,6 @@ pub fn main() -> ExitCode {
     match cli.command {
         Command::Run(args) => run::run(&args),
         Command::Plot(args) => run::plot(&args),
+        Command::Lcp(args) => lcp::lcp(&args),
     }
 }

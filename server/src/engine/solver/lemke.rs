@@ -8,7 +8,7 @@
 //!    column's largest entry; tiny negative right-hand sides count as zero in
 //!    the ratio test.
 //! 3. Ratios within `1e-9` (relative) tie, and ties are broken by the
-//!    lexicographic rule, which cannot cycle: it is the ratio test of the
+//!    lexicographic rule (compared exactly), which cannot cycle: it is the ratio test of the
 //!    problem with `q` perturbed by `(eps, eps^2, ..., eps^n)`, whose tie
 //!    breakers are the columns of the basis inverse, i.e. the tableau's `w`
 //!    columns. When the artificial `z0` ties, it leaves (the solution is found).
@@ -99,7 +99,7 @@ impl Lemke {
     /// `M, q` with the looser [`REGULARIZED_VERIFY_TOL`], and the info says
     /// it was regularised. When it fails too, the first error is returned.
     pub fn solve(&mut self, lcp: &Lcp, z: &mut [f64]) -> Result<SolveInfo, LemkeError> {
-        let first = match self.solve_shifted(lcp, z, 0.0, VERIFY_TOL) {
+        let first = match self.solve_plain(lcp, z) {
             Ok(info) => return Ok(info),
             Err(e) => e,
         };
@@ -111,6 +111,12 @@ impl Lemke {
             }),
             Err(_) => Err(first),
         }
+    }
+
+    /// Lemke's method as the textbook has it (with the floating-point care
+    /// above), without the regularised retry: what the solver corpus checks.
+    pub fn solve_plain(&mut self, lcp: &Lcp, z: &mut [f64]) -> Result<SolveInfo, LemkeError> {
+        self.solve_shifted(lcp, z, 0.0, VERIFY_TOL)
     }
 
     /// Lemke on `M + shift I`, verified against the original `M, q` to the
@@ -244,7 +250,10 @@ impl Lemke {
         if let Some(&i) = self.ties.iter().find(|&&i| self.basis[i] == 2 * n) {
             return Some(i);
         }
-        // Lexicographic rule over the columns of B^-1 (the w columns).
+        // Lexicographic rule over the columns of B^-1 (the w columns). Its
+        // comparisons are exact: a tolerance there merges distinct entries
+        // and the rule stops being a rule (tobenna, 40 x 40 with 32 zeros in
+        // q, then cycles to the pivot limit; exact, it solves in 179 pivots).
         for k in 0..n {
             if self.ties.len() <= 1 {
                 break;
@@ -255,8 +264,7 @@ impl Lemke {
                 .iter()
                 .map(|&i| v(i))
                 .fold(f64::INFINITY, f64::min);
-            let scale = self.ties.iter().map(|&i| v(i).abs()).fold(0.0, f64::max);
-            self.ties.retain(|&i| v(i) - vmin <= TIE_TOL * scale);
+            self.ties.retain(|&i| v(i) <= vmin);
         }
         self.ties.first().copied()
     }

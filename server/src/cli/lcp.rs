@@ -1,0 +1,104 @@
+//! `cosim-server lcp FILE`: solve a Siconos LCP or mixed LCP file.
+
+use super::{LcpArgs, EXIT_BAD_INPUT, EXIT_FAILED};
+use crate::corpus::{read_lcp, read_mlcp, solve_mlcp, MlcpOutcome};
+use crate::engine::solver::{Lcp, Lemke, LemkeError};
+use serde_json::json;
+use std::process::ExitCode;
+
+fn status(e: &LemkeError) -> &'static str {
+    match e {
+        LemkeError::RayTermination { .. } => "ray_termination",
+        LemkeError::PivotLimit { .. } => "pivot_limit",
+        LemkeError::NumericalBreakdown { .. } => "not_converged",
+    }
+}
+
+pub fn lcp(args: &LcpArgs) -> ExitCode {
+    let file = args.file.display().to_string();
+    let text = match std::fs::read_to_string(&args.file) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("error: {file}: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    // An MLCP file starts with its two storage flags; try the LCP form first
+    // unless the name says otherwise.
+    let mixed = file.ends_with("_mlcp.dat");
+    let report = if mixed {
+        let p = match read_mlcp(&text) {
+            Ok(p) => p,
+            Err(e) => {
+                eprintln!("error: {file}: {e}");
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
+        };
+        match solve_mlcp(&p) {
+            MlcpOutcome::Solved {
+                u,
+                v,
+                pivots,
+                residual,
+                ..
+            } => {
+                json!({"file": file, "status": "solved", "solver": "lemke", "pivots": pivots, "residual": residual, "u": u, "z": v})
+            }
+            MlcpOutcome::SingularEquality { ratio } => {
+                json!({"file": file, "status": "singular", "solver": "lemke", "pivot_ratio": if ratio.is_finite() { json!(ratio) } else { json!("inf") }})
+            }
+            MlcpOutcome::Lemke { error, .. } => {
+                json!({"file": file, "status": status(&error), "solver": "lemke", "message": error.to_string()})
+            }
+        }
+    } else {
+        let p = match read_lcp(&text) {
+            Ok(p) => p,
+            Err(e) => {
+                eprintln!("error: {file}: {e}");
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
+        };
+        let n = p.q.len();
+        let mut z = vec![0.0; n];
+        match Lemke::new().solve_plain(
+            &Lcp {
+                n,
+                m: &p.m.data,
+                q: &p.q,
+            },
+            &mut z,
+        ) {
+            Ok(info) => {
+                json!({"file": file, "status": "solved", "solver": "lemke", "pivots": info.work, "residual": info.residual, "z": z})
+            }
+            Err(e) => {
+                let pivots = match e {
+                    LemkeError::RayTermination { pivots, .. }
+                    | LemkeError::PivotLimit { pivots, .. }
+                    | LemkeError::NumericalBreakdown { pivots, .. } => pivots,
+                };
+                json!({"file": file, "status": status(&e), "solver": "lemke", "pivots": pivots, "message": e.to_string()})
+            }
+        }
+    };
+    let solved = report["status"] == "solved";
+    if args.json {
+        println!("{report}");
+    } else {
+        println!("{file}: {}", report["status"].as_str().unwrap_or("?"));
+        for key in ["pivots", "residual", "pivot_ratio", "message"] {
+            if let Some(v) = report.get(key) {
+                println!("  {key}: {v}");
+            }
+        }
+        if let Some(z) = report.get("z") {
+            println!("  z: {z}");
+        }
+    }
+    if solved {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(EXIT_FAILED)
+    }
+}

@@ -1,0 +1,118 @@
+//! The Siconos LCP corpus (`../shared/data/lcp/siconos`, read in place):
+//! every problem gives the outcome of the data README's table.
+
+use cosim_server::corpus::{read_lcp, LcpProblem};
+use cosim_server::engine::solver::{relative_residual, Lcp, Lemke, LemkeError, SolveInfo};
+use std::path::PathBuf;
+
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../shared/data/lcp/siconos")
+        .join(name)
+}
+
+fn load(name: &str) -> LcpProblem {
+    let text = std::fs::read_to_string(data(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+    read_lcp(&text).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+fn check_lcp(name: &str) -> Result<(SolveInfo, Vec<f64>), LemkeError> {
+    let p = load(name);
+    let n = p.q.len();
+    let lcp = Lcp {
+        n,
+        m: &p.m.data,
+        q: &p.q,
+    };
+    let mut z = vec![0.0; n];
+    let info = Lemke::new().solve_plain(&lcp, &mut z)?;
+    // The data README's criterion, recomputed here from M and q.
+    assert!(relative_residual(&lcp, &z) <= 1e-6, "{name}: residual");
+    assert!(z.iter().all(|x| x.is_finite() && *x >= 0.0));
+    Ok((info, z))
+}
+
+#[test]
+fn block_stored_twins_decode_to_the_same_matrix() {
+    for (dense, block) in [
+        ("lcp_ortiz.dat", "lcp_ortiz_block.dat"),
+        ("lcp_trivial.dat", "lcp_trivial_block.dat"),
+        ("lcp_deudeu.dat", "lcp_deudeu_block.dat"),
+    ] {
+        assert_eq!(load(dense), load(block), "{dense} vs {block}");
+    }
+}
+
+#[test]
+fn every_lcp_gives_the_expected_outcome() {
+    let solvable = [
+        "lcp_CPS_1.dat",
+        "lcp_CPS_2.dat",
+        "lcp_CPS_4.dat",
+        "lcp_CPS_4bis.dat",
+        "lcp_CPS_5.dat",
+        "lcp_Pang_isolated_sol.dat",
+        "lcp_deudeu.dat",
+        "lcp_deudeu_block.dat",
+        "lcp_ortiz.dat",
+        "lcp_ortiz_block.dat",
+        "lcp_trivial.dat",
+        "lcp_trivial_block.dat",
+        "lcp_enum_fails.dat",
+        "lcp_exp_murty.dat",
+        "lcp_exp_murty2.dat",
+        "lcp_inf_sol_perturbed.dat",
+        "lcp_mmc.dat",
+        "lcp_tobenna.dat",
+    ];
+    for name in solvable {
+        let (info, _) = check_lcp(name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        eprintln!(
+            "{name}: solved in {} pivots, residual {:.1e}",
+            info.work, info.residual
+        );
+        match name {
+            "lcp_exp_murty.dat" => assert_eq!(info.work, 2, "{name}"),
+            "lcp_exp_murty2.dat" => assert_eq!(info.work, 64, "{name}"),
+            _ => {}
+        }
+    }
+    for name in ["lcp_CPS_3.dat", "lcp_Pang_isolated_sol_perturbed.dat"] {
+        match check_lcp(name) {
+            Err(LemkeError::RayTermination { pivots, .. }) => {
+                eprintln!("{name}: ray termination after {pivots} pivots")
+            }
+            other => panic!("{name}: expected ray termination, got {other:?}"),
+        }
+    }
+    // CPS_3 ends on a ray at the first pivot.
+    assert!(matches!(
+        check_lcp("lcp_CPS_3.dat"),
+        Err(LemkeError::RayTermination { pivots: 1, .. })
+    ));
+}
+
+#[test]
+fn lcp_command_prints_the_outcome_as_json() {
+    let bin = env!("CARGO_BIN_EXE_cosim-server");
+    for (name, status, code) in [
+        ("lcp_exp_murty2.dat", "solved", 0),
+        ("lcp_Pang_isolated_sol_perturbed.dat", "ray_termination", 1),
+    ] {
+        let out = std::process::Command::new(bin)
+            .arg("lcp")
+            .arg(data(name))
+            .arg("--json")
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(code), "{name}");
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+        assert_eq!(v["status"], status, "{name}");
+        assert_eq!(v["solver"], "lemke");
+        assert!(v["pivots"].is_u64());
+        if status == "solved" {
+            assert_eq!(v["pivots"], 64);
+            assert_eq!(v["z"].as_array().map(Vec::len), Some(6));
+        }
+    }
+}
