@@ -57,12 +57,15 @@ pub enum SolverChoice {
     /// Schur-complement reduction to a pure LCP, solved by Lemke's algorithm.
     #[default]
     Lemke,
+    /// Projected Gauss-Seidel with a proximal step on the mixed problem.
+    Pgs,
 }
 
 impl SolverChoice {
     pub fn as_str(self) -> &'static str {
         match self {
             SolverChoice::Lemke => "lemke",
+            SolverChoice::Pgs => "pgs",
         }
     }
 }
@@ -72,7 +75,10 @@ impl std::str::FromStr for SolverChoice {
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s {
             "lemke" => Ok(SolverChoice::Lemke),
-            other => Err(format!("unknown solver {other:?}, expected one of: lemke")),
+            "pgs" => Ok(SolverChoice::Pgs),
+            other => Err(format!(
+                "unknown solver {other:?}, expected one of: lemke, pgs"
+            )),
         }
     }
 }

@@ -21,11 +21,18 @@ pub fn run(engine: &mut Engine, n: u64, mut check: impl FnMut(&Engine, &StepRepo
     }
 }
 
+/// The solver the analytic tests run with: `lemke` unless the environment
+/// variable `COSIM_TEST_SOLVER` names another (`.ci/run` runs them with
+/// `pgs` too).
+pub fn solver() -> String {
+    std::env::var("COSIM_TEST_SOLVER").unwrap_or_else(|_| "lemke".into())
+}
+
 /// `[sim]` header with the given step and gravity.
 pub fn sim(dt: f64, steps: u64, gravity: [f64; 3]) -> String {
     format!(
-        "[sim]\ndt = {dt:e}\nsteps = {steps}\ngravity = [{:e}, {:e}, {:e}]\nfriction_directions = 8\n",
-        gravity[0], gravity[1], gravity[2]
+        "[sim]\ndt = {dt:e}\nsteps = {steps}\ngravity = [{:e}, {:e}, {:e}]\nfriction_directions = 8\nsolver = \"{}\"\n",
+        gravity[0], gravity[1], gravity[2], solver()
     )
 }
 

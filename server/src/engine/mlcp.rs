@@ -123,10 +123,16 @@ pub struct Mlcp {
     pub nd: usize,
     /// Normal row `i` belongs to `contacts[lcp_contacts[i]]`.
     pub lcp_contacts: Vec<usize>,
-    /// Friction block `f` belongs to normal row `friction_of[f]`.
+    /// Friction block `f` belongs to normal row `friction_of[f]`, with
+    /// coefficient `mu[f]`.
     pub friction_of: Vec<usize>,
+    pub mu: Vec<f64>,
     /// `G^T nu_free` per row (plus `beta psi_b / h` on joint rows).
     b: Vec<f64>,
+    /// Constant term of each row: a row's residual is `G_k^T nu' + offset_k`
+    /// (`beta psi_b / h` on joint rows, `a_n` on normal rows, 0 on friction
+    /// rows). The iterative solver works with it.
+    pub offset: Vec<f64>,
     /// Delassus matrix of all rows, row-major.
     w: Vec<f64>,
     /// `A_bb`, then its Cholesky factor (lower triangle), column-major.
@@ -141,6 +147,9 @@ pub struct Mlcp {
     pub z: Vec<f64>,
     /// Joint impulses (3 per joint, on body A).
     pub p_b: Vec<f64>,
+    /// Impulses of every row (joint, normal, friction): the iterative
+    /// solver's unknowns.
+    pub lambda: Vec<f64>,
 }
 
 impl Mlcp {
@@ -168,8 +177,10 @@ impl Mlcp {
         let nd = p.friction_directions;
         self.rows.clear();
         self.b.clear();
+        self.offset.clear();
         self.lcp_contacts.clear();
         self.friction_of.clear();
+        self.mu.clear();
 
         // Joint rows: psi_b = x_A + R_A a_A - x_B - R_B a_B, one row per axis.
         for joint in &model.joints {
@@ -179,6 +190,7 @@ impl Mlcp {
             for k in 0..3 {
                 let row = Row::along(Vector3::ith(k, 1.0), ra, rb);
                 self.b.push(row.velocity(nu_free) + p.beta * psi[k] / p.h);
+                self.offset.push(p.beta * psi[k] / p.h);
                 self.rows.push(row);
             }
         }
@@ -201,10 +213,12 @@ impl Mlcp {
                     self.rows.push(row);
                 }
                 self.friction_of.push(i);
+                self.mu.push(c.mu);
             }
         }
         self.nf = self.friction_of.len();
         self.nd = nd;
+        self.offset.resize(self.rows.len(), 0.0);
 
         // Delassus matrix W = G^T M^-1 G (symmetric).
         let r = self.rows.len();
@@ -315,7 +329,9 @@ impl Mlcp {
         // Gap terms: the free normal velocity includes the joints' response.
         for i in 0..self.nc {
             let c = &contacts[self.lcp_contacts[i]];
-            self.lcp_q[i] += normal_offset(c, self.lcp_q[i], p);
+            let a_n = normal_offset(c, self.lcp_q[i], p);
+            self.lcp_q[i] += a_n;
+            self.offset[nb + i] = a_n;
         }
         // E and its transpose, U: friction rows of contact f sit at
         // nc + f nd ..; its slack s_f at m + f.

@@ -32,9 +32,10 @@ pub use state::{BodyState, State};
 use applied::InvMass;
 use collision::{Counterpart, Geometry};
 use contact::Contact;
+use cosim_shared::SolverChoice;
 use mlcp::Mlcp;
 use nalgebra::Vector3;
-use solver::{Lcp, Lemke};
+use solver::{Lcp, Lemke, Pgs, PgsParams, PgsProblem};
 use std::time::Instant;
 
 /// What an impulse row of the output describes.
@@ -84,6 +85,12 @@ pub struct Engine {
     inputs: Inputs,
     ws: Workspace,
     lemke: Lemke,
+    pgs: Pgs,
+    pgs_params: PgsParams,
+    /// Warm start of the iterative solver: the last step's normal impulse
+    /// of every potential contact (by its canonical index) and joint impulses.
+    warm_normal: Vec<f64>,
+    warm_joint: Vec<f64>,
     prepared: bool,
     collision_time: f64,
 }
@@ -92,7 +99,12 @@ impl Engine {
     pub fn new(model: Model) -> Engine {
         let state = State::initial(&model);
         let inputs = Inputs::new(&model);
+        let (contacts, joints) = (model.potential_contacts(), model.joints.len());
         Engine {
+            pgs: Pgs::default(),
+            pgs_params: PgsParams::default(),
+            warm_normal: vec![0.0; contacts],
+            warm_joint: vec![0.0; 3 * joints],
             model,
             state,
             inputs,
@@ -115,6 +127,11 @@ impl Engine {
     pub fn set_state(&mut self, state: State) {
         self.state = state;
         self.prepared = false;
+    }
+
+    /// Tolerance, iteration cap and relaxation of the iterative solver.
+    pub fn set_pgs_params(&mut self, params: PgsParams) {
+        self.pgs_params = params;
     }
 
     pub fn inputs(&self) -> &Inputs {
@@ -231,6 +248,7 @@ impl Engine {
             contacts_in_lcp: 0,
             active_contacts: 0,
             resolves: 0,
+            not_converged: false,
             regularized: 0,
             max_penetration: 0.0,
             max_joint_error: 0.0,
@@ -300,13 +318,55 @@ impl Engine {
                     m: &m.lcp_m,
                     q: &m.lcp_q,
                 };
-                let info = self.lemke.solve(&lcp, &mut m.z).map_err(StepError::Lemke)?;
-                report.pivots += info.work;
-                report.regularized += usize::from(info.regularized);
-                report.residual = report.residual.max(info.residual);
                 report.lcp_size = report.lcp_size.max(n);
                 report.contacts_in_lcp = report.contacts_in_lcp.max(m.nc);
-                m.recover(&ws.minv, &ws.nu_free, &mut ws.nu);
+                match p.solver {
+                    SolverChoice::Lemke => {
+                        let info = self.lemke.solve(&lcp, &mut m.z).map_err(StepError::Lemke)?;
+                        report.pivots += info.work;
+                        report.regularized += usize::from(info.regularized);
+                        report.residual = report.residual.max(info.residual);
+                        m.recover(&ws.minv, &ws.nu_free, &mut ws.nu);
+                    }
+                    SolverChoice::Pgs => {
+                        // Warm start: joint impulses and normal impulses by
+                        // contact identity from the last step.
+                        m.lambda.clear();
+                        m.lambda.resize(m.rows.len(), 0.0);
+                        m.lambda[..m.nb].copy_from_slice(&self.warm_joint);
+                        for (i, &ci) in m.lcp_contacts.iter().enumerate() {
+                            m.lambda[m.nb + i] = self.warm_normal[ws.contacts[ci].id];
+                        }
+                        let problem = PgsProblem {
+                            rows: &m.rows,
+                            offset: &m.offset,
+                            nb: m.nb,
+                            nc: m.nc,
+                            nd: m.nd,
+                            friction_of: &m.friction_of,
+                            mu: &m.mu,
+                            minv: &ws.minv,
+                            nu_free: &ws.nu_free,
+                            lcp: Lcp {
+                                n,
+                                m: &m.lcp_m,
+                                q: &m.lcp_q,
+                            },
+                        };
+                        let info = self.pgs.solve(
+                            &problem,
+                            &self.pgs_params,
+                            &mut m.lambda,
+                            &mut ws.nu,
+                            &mut m.z,
+                        );
+                        report.pivots += info.iterations;
+                        report.residual = report.residual.max(info.residual);
+                        report.not_converged |= !info.converged;
+                        m.p_b.clear();
+                        m.p_b.extend_from_slice(&m.lambda[..m.nb]);
+                    }
+                }
             }
             timings.solve += t1.elapsed().as_secs_f64();
             if !ws.nu.iter().all(|x| x.is_finite()) {
@@ -330,11 +390,17 @@ impl Engine {
         }
     }
 
-    /// The step's impulses as records, from the solved mLCP.
+    /// The step's impulses as records, from the solved mLCP; also keeps
+    /// them as the next step's warm start.
     fn record_impulses(&mut self) {
         let ws = &mut self.ws;
         let m = &ws.mlcp;
         ws.impulses.clear();
+        self.warm_joint.copy_from_slice(&m.p_b);
+        self.warm_normal.fill(0.0);
+        for (i, &ci) in m.lcp_contacts.iter().enumerate() {
+            self.warm_normal[ws.contacts[ci].id] = m.z[i];
+        }
         for (j, joint) in self.model.joints.iter().enumerate() {
             let p = Vector3::new(m.p_b[3 * j], m.p_b[3 * j + 1], m.p_b[3 * j + 2]);
             let party = |a: Attachment| match a {

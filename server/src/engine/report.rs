@@ -56,7 +56,8 @@ pub struct StepReport {
     pub solver: &'static str,
     /// `None` when the step succeeded.
     pub error: Option<StepError>,
-    /// Lemke pivots summed over the solves of the step (0: trivial LCP).
+    /// Lemke pivots (or PGS sweeps) summed over the solves of the step
+    /// (0: trivial LCP).
     pub pivots: usize,
     /// Largest relative natural-map residual of the step's LCP solves.
     pub residual: f64,
@@ -68,6 +69,9 @@ pub struct StepReport {
     pub active_contacts: usize,
     /// Left-out contacts that the velocity check added back (re-solves).
     pub resolves: usize,
+    /// The iterative solver stopped on its iteration cap, not its tolerance:
+    /// the step went on with the answer it had (residual reported).
+    pub not_converged: bool,
     /// Solves of the step that needed Lemke's regularised retry (see
     /// `solver::lemke`): their residual is up to 1e-6 instead of 1e-8.
     pub regularized: usize,
@@ -83,6 +87,10 @@ impl StepReport {
     }
 
     pub fn status(&self) -> &'static str {
-        self.error.map_or("solved", |e| e.code())
+        match self.error {
+            Some(e) => e.code(),
+            None if self.not_converged => "not_converged",
+            None => "solved",
+        }
     }
 }

@@ -67,6 +67,23 @@ impl Row {
         Row::along(dir, Some((g.a, g.r_a)), b)
     }
 
+    /// `ca a + cb b` for two rows on the same bodies (rows are linear in
+    /// their direction: `lin = dir`, `ang = r x dir`).
+    pub fn combine(a: &Row, ca: f64, b: &Row, cb: f64) -> Row {
+        let mix = |x: Option<BodyJac>, y: Option<BodyJac>| match (x, y) {
+            (Some(x), Some(y)) => Some(BodyJac {
+                body: x.body,
+                lin: x.lin * ca + y.lin * cb,
+                ang: x.ang * ca + y.ang * cb,
+            }),
+            _ => None,
+        };
+        Row {
+            a: mix(a.a, b.a),
+            b: mix(a.b, b.b),
+        }
+    }
+
     /// The row's velocity `G_k^T nu`.
     pub fn velocity(&self, nu: &[f64]) -> f64 {
         self.a.map_or(0.0, |j| j.velocity(nu)) + self.b.map_or(0.0, |j| j.velocity(nu))

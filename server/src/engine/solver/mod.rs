@@ -6,8 +6,10 @@
 //! measure Siconos uses for its test corpus.
 
 pub mod lemke;
+pub mod pgs;
 
 pub use lemke::{Lemke, LemkeError};
+pub use pgs::{Pgs, PgsInfo, PgsParams, PgsProblem};
 
 /// A dense LCP `0 <= M z + q _|_ z >= 0`, `M` row-major `n x n`.
 #[derive(Debug, Clone, Copy)]

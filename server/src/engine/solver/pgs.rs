@@ -1,0 +1,328 @@
+//! Projected Gauss-Seidel with a proximal step (prox PGS) on the mixed
+//! problem in impulse space (formulation.md): one sweep updates every row
+//! `k` by `lambda_k <- proj_K(lambda_k - omega r_k / W_kk)`, `r_k` the row's
+//! residual velocity `G_k^T nu + offset_k`, `K` = R for a joint row, R+ for a
+//! normal row, and for a contact's friction block the polyhedral cone
+//! `{p_f >= 0, sum p_f <= mu p_n}` at its current normal impulse.
+//!
+//! A friction block is solved as one 2-D tangential impulse: the `n_d`
+//! direction rows are strongly coupled (`d_j` and `-d_j` are the same row up
+//! to sign), so a row-by-row or Jacobi step over them diverges. The block
+//! step removes the tangential slip with the exact 2 x 2 tangential Delassus
+//! block, projects the impulse onto the cone's polygon (vertices
+//! `mu p_n d_j`) and writes it back on the two directions that bracket it.
+//!
+//! The slack `s` of the Lemke form (a zero diagonal) never enters: the cone
+//! projection replaces it, and `s` is recovered afterwards as the largest
+//! sliding speed against a friction direction, `max(0, max_j -v_j)`, so that
+//! the answer can be judged by the same natural-map residual as Lemke's.
+//!
+//! Matrix-free: the velocities are kept up to date (`nu = nu_free + M^-1 G
+//! lambda`), so a row costs O(1) and no Delassus matrix is needed.
+
+use super::{relative_residual, Lcp};
+use crate::engine::applied::InvMass;
+use crate::engine::rows::Row;
+
+/// Default stopping tolerance on the relative residual.
+pub const DEFAULT_TOLERANCE: f64 = 1e-10;
+/// Default iteration (sweep) cap.
+pub const DEFAULT_MAX_ITERATIONS: usize = 5000;
+/// Sweeps between residual evaluations (each costs O(n^2)).
+const CHECK_EVERY: usize = 4;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PgsParams {
+    pub tolerance: f64,
+    pub max_iterations: usize,
+    /// Relaxation factor omega on the step `1 / W_kk`.
+    pub relaxation: f64,
+}
+
+impl Default for PgsParams {
+    fn default() -> Self {
+        PgsParams {
+            tolerance: DEFAULT_TOLERANCE,
+            max_iterations: DEFAULT_MAX_ITERATIONS,
+            relaxation: 1.0,
+        }
+    }
+}
+
+/// The step's problem, as the mLCP stage built it.
+pub struct PgsProblem<'a> {
+    /// Rows: `nb` joint rows, `nc` normal rows, then `nd` per friction block.
+    pub rows: &'a [Row],
+    pub offset: &'a [f64],
+    pub nb: usize,
+    pub nc: usize,
+    pub nd: usize,
+    /// Friction block `f` belongs to normal row `friction_of[f]`, with `mu[f]`.
+    pub friction_of: &'a [usize],
+    pub mu: &'a [f64],
+    pub minv: &'a [InvMass],
+    pub nu_free: &'a [f64],
+    /// The reduced LCP in `[p_n; p_f; s]`, for the residual.
+    pub lcp: Lcp<'a>,
+}
+
+/// How the iteration ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PgsInfo {
+    pub iterations: usize,
+    /// Relative residual reached (see [`Pgs::residual`]).
+    pub residual: f64,
+    /// Whether the tolerance stopped it (else the iteration cap).
+    pub converged: bool,
+}
+
+/// `(cos, sin)` of friction direction `j` of `n_d`.
+fn direction(j: usize, nd: usize) -> (f64, f64) {
+    let a = std::f64::consts::TAU * j as f64 / nd as f64;
+    (a.cos(), a.sin())
+}
+
+/// The point of the polygon with vertices `cap d_j` (the polyhedral cone at
+/// normal impulse `cap / mu`) nearest to `x`, in tangent-plane coordinates.
+pub fn project_polygon(x: [f64; 2], cap: f64, nd: usize) -> [f64; 2] {
+    if cap <= 0.0 {
+        return [0.0, 0.0];
+    }
+    // Inside: within every edge's supporting line.
+    let half = std::f64::consts::PI / nd as f64;
+    let apothem = cap * half.cos();
+    let inside = (0..nd).all(|j| {
+        let a = std::f64::consts::TAU * j as f64 / nd as f64 + half;
+        a.cos() * x[0] + a.sin() * x[1] <= apothem
+    });
+    if inside {
+        return x;
+    }
+    // Else the nearest point of the nearest edge.
+    let mut best = [0.0, 0.0];
+    let mut best_d = f64::INFINITY;
+    for j in 0..nd {
+        let (c0, s0) = direction(j, nd);
+        let (c1, s1) = direction(j + 1, nd);
+        let (p0, p1) = ([cap * c0, cap * s0], [cap * c1, cap * s1]);
+        let e = [p1[0] - p0[0], p1[1] - p0[1]];
+        let t = (((x[0] - p0[0]) * e[0] + (x[1] - p0[1]) * e[1]) / (e[0] * e[0] + e[1] * e[1]))
+            .clamp(0.0, 1.0);
+        let q = [p0[0] + t * e[0], p0[1] + t * e[1]];
+        let d = (q[0] - x[0]).powi(2) + (q[1] - x[1]).powi(2);
+        if d < best_d {
+            best_d = d;
+            best = q;
+        }
+    }
+    best
+}
+
+/// Writes the 2-D tangential impulse `p` as nonnegative impulses on the two
+/// friction directions that bracket it (the others zero).
+fn decompose(p: [f64; 2], nd: usize, out: &mut [f64]) {
+    out.fill(0.0);
+    if p == [0.0, 0.0] {
+        return;
+    }
+    let step = std::f64::consts::TAU / nd as f64;
+    let angle = p[1].atan2(p[0]).rem_euclid(std::f64::consts::TAU);
+    let j = ((angle / step) as usize).min(nd - 1);
+    let (c0, s0) = direction(j, nd);
+    let (c1, s1) = direction(j + 1, nd);
+    // p = a d_j + b d_j+1.
+    let det = c0 * s1 - s0 * c1;
+    let a = (p[0] * s1 - p[1] * c1) / det;
+    let b = (c0 * p[1] - s0 * p[0]) / det;
+    out[j] = a.max(0.0);
+    out[(j + 1) % nd] += b.max(0.0);
+}
+
+#[derive(Debug, Default, Clone)]
+pub struct Pgs {
+    diag: Vec<f64>,
+    /// Per friction block: rows along t1 and t2 and the inverse of their
+    /// 2 x 2 Delassus block.
+    tangent: Vec<(Row, Row, [[f64; 2]; 2])>,
+}
+
+impl Pgs {
+    /// Iterates from the warm start in `lambda` (all rows); leaves the
+    /// impulses in `lambda`, the velocities in `nu` and the LCP unknowns
+    /// `[p_n; p_f; s]` in `z`.
+    pub fn solve(
+        &mut self,
+        p: &PgsProblem,
+        params: &PgsParams,
+        lambda: &mut [f64],
+        nu: &mut Vec<f64>,
+        z: &mut Vec<f64>,
+    ) -> PgsInfo {
+        self.diag.clear();
+        self.diag
+            .extend(p.rows.iter().map(|row| row.coupling(row, p.minv)));
+        nu.clear();
+        nu.extend_from_slice(p.nu_free);
+        for (k, row) in p.rows.iter().enumerate() {
+            if lambda[k] != 0.0 {
+                row.apply(lambda[k], p.minv, nu);
+            }
+        }
+        self.tangent.clear();
+        for f in 0..p.friction_of.len() {
+            let base = p.nb + p.nc + f * p.nd;
+            // d_0 = t1; t2 from d_1 = cos(a) t1 + sin(a) t2.
+            let (c, s) = direction(1, p.nd);
+            let t1 = p.rows[base];
+            let t2 = Row::combine(&p.rows[base + 1], 1.0 / s, &t1, -c / s);
+            let (a, b, d) = (
+                t1.coupling(&t1, p.minv),
+                t1.coupling(&t2, p.minv),
+                t2.coupling(&t2, p.minv),
+            );
+            let det = a * d - b * b;
+            let inv = if det > 1e-14 * (a * d).max(f64::MIN_POSITIVE) {
+                [[d / det, -b / det], [-b / det, a / det]]
+            } else {
+                [[0.0; 2]; 2]
+            };
+            self.tangent.push((t1, t2, inv));
+        }
+        let omega = params.relaxation;
+        let mut info = PgsInfo {
+            iterations: 0,
+            residual: f64::INFINITY,
+            converged: false,
+        };
+        for it in 1..=params.max_iterations.max(1) {
+            // Joint and normal rows, one at a time.
+            let free_rows = p.nb + p.nc;
+            for (k, (row, lam)) in p.rows[..free_rows]
+                .iter()
+                .zip(lambda.iter_mut())
+                .enumerate()
+            {
+                let d = self.diag[k];
+                if d <= 0.0 {
+                    continue;
+                }
+                let res = row.velocity(nu) + p.offset[k];
+                let mut new = *lam - omega * res / d;
+                if k >= p.nb {
+                    new = new.max(0.0);
+                }
+                let delta = new - *lam;
+                if delta != 0.0 {
+                    *lam = new;
+                    row.apply(delta, p.minv, nu);
+                }
+            }
+            // Friction blocks: a 2-D block step, then the cone's polygon.
+            for (f, &i) in p.friction_of.iter().enumerate() {
+                let base = p.nb + p.nc + f * p.nd;
+                let (t1, t2, inv) = &self.tangent[f];
+                let v = [t1.velocity(nu), t2.velocity(nu)];
+                let mut pt = [0.0, 0.0];
+                for j in 0..p.nd {
+                    let (c, s) = direction(j, p.nd);
+                    pt[0] += lambda[base + j] * c;
+                    pt[1] += lambda[base + j] * s;
+                }
+                let target = [
+                    pt[0] - omega * (inv[0][0] * v[0] + inv[0][1] * v[1]),
+                    pt[1] - omega * (inv[1][0] * v[0] + inv[1][1] * v[1]),
+                ];
+                let cap = p.mu[f] * lambda[p.nb + i];
+                let new = project_polygon(target, cap, p.nd);
+                let delta = [new[0] - pt[0], new[1] - pt[1]];
+                if delta != [0.0, 0.0] {
+                    t1.apply(delta[0], p.minv, nu);
+                    t2.apply(delta[1], p.minv, nu);
+                    decompose(new, p.nd, &mut lambda[base..base + p.nd]);
+                }
+            }
+            if it % CHECK_EVERY == 0 || it == params.max_iterations {
+                info.iterations = it;
+                info.residual = self.residual(p, lambda, nu, z);
+                if info.residual <= params.tolerance {
+                    info.converged = true;
+                    return info;
+                }
+            }
+        }
+        info.residual = self.residual(p, lambda, nu, z);
+        info
+    }
+
+    /// The residual both solvers share: the natural-map residual of the
+    /// reduced LCP at `[p_n; p_f; s]` (`s` the largest sliding speed against
+    /// a friction direction), with the joint rows' residual velocities
+    /// added in quadrature, relative to `max(||q||, ||joint offsets||)`.
+    /// Also leaves `[p_n; p_f; s]` in `z`.
+    pub fn residual(
+        &mut self,
+        p: &PgsProblem,
+        lambda: &[f64],
+        nu: &[f64],
+        z: &mut Vec<f64>,
+    ) -> f64 {
+        let m = p.rows.len() - p.nb;
+        z.clear();
+        z.extend_from_slice(&lambda[p.nb..]);
+        for f in 0..p.friction_of.len() {
+            let base = p.nb + p.nc + f * p.nd;
+            let s = (0..p.nd)
+                .map(|j| -p.rows[base + j].velocity(nu))
+                .fold(0.0f64, f64::max);
+            z.push(s);
+        }
+        debug_assert_eq!(z.len(), m + p.friction_of.len());
+        let qn = p.lcp.q.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let lcp_abs = if p.lcp.n > 0 {
+            relative_residual(&p.lcp, z) * if qn > 0.0 { qn } else { 1.0 }
+        } else {
+            0.0
+        };
+        let joint_abs2: f64 = (0..p.nb)
+            .map(|k| {
+                let v = p.rows[k].velocity(nu) + p.offset[k];
+                v * v
+            })
+            .sum();
+        let joint_scale = (0..p.nb)
+            .map(|k| {
+                let v = p.rows[k].velocity(p.nu_free) + p.offset[k];
+                v * v
+            })
+            .sum::<f64>()
+            .sqrt();
+        let abs = (lcp_abs * lcp_abs + joint_abs2).sqrt();
+        let scale = qn.max(joint_scale);
+        if scale > 0.0 {
+            abs / scale
+        } else {
+            abs
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn polygon_projection_and_decomposition() {
+        // Square cone (n_d = 4), cap 1: vertices (1,0), (0,1), (-1,0), (0,-1).
+        assert_eq!(project_polygon([0.2, 0.1], 1.0, 4), [0.2, 0.1]);
+        let p = project_polygon([2.0, 0.0], 1.0, 4);
+        assert!((p[0] - 1.0).abs() < 1e-15 && p[1].abs() < 1e-15);
+        let p = project_polygon([1.0, 1.0], 1.0, 4);
+        assert!((p[0] - 0.5).abs() < 1e-15 && (p[1] - 0.5).abs() < 1e-15);
+        assert_eq!(project_polygon([1.0, 1.0], 0.0, 4), [0.0, 0.0]);
+        let mut out = [0.0; 4];
+        decompose([0.5, 0.5], 4, &mut out);
+        assert!((out[0] - 0.5).abs() < 1e-15 && (out[1] - 0.5).abs() < 1e-15 && out[2] == 0.0);
+        decompose([0.0, -0.3], 4, &mut out);
+        assert!((out[3] - 0.3).abs() < 1e-15 && out.iter().sum::<f64>() - 0.3 < 1e-15);
+    }
+}

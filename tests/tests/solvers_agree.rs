@@ -1,0 +1,35 @@
+//! Lemke is the ground truth for prox PGS: from the same state, both give
+//! the same velocities where PGS converged.
+
+use cosim_server::engine::{Engine, Model};
+use cosim_server::scenes;
+use cosim_shared::SolverChoice;
+
+#[test]
+fn pgs_agrees_with_lemke_on_the_reference_scene() {
+    let scene = scenes::reference().expect("built-in scene");
+    let mut lemke = Engine::new(Model::from_scene(&scene));
+    let mut model = Model::from_scene(&scene);
+    model.params.solver = SolverChoice::Pgs;
+    let mut pgs = Engine::new(model);
+    let (mut worst, mut compared, mut unconverged) = (0.0f64, 0, 0);
+    for _ in 0..2000 {
+        let before = lemke.state().clone();
+        assert!(lemke.step().ok());
+        pgs.set_state(before);
+        let r = pgs.step();
+        assert!(r.ok(), "PGS step {} failed: {}", r.step, r.status());
+        if r.not_converged {
+            unconverged += 1;
+            continue;
+        }
+        for (a, b) in lemke.state().bodies.iter().zip(&pgs.state().bodies) {
+            // Angular velocity times 0.1 m, the larger radius: surface speed.
+            worst = worst.max((a.v - b.v).norm()).max((a.w - b.w).norm() * 0.1);
+        }
+        compared += 1;
+    }
+    eprintln!("{compared} steps compared, largest velocity difference {worst:e} m/s, {unconverged} not converged");
+    assert!(compared >= 1900);
+    assert!(worst < 1e-6, "PGS and Lemke differ by {worst} m/s");
+}
