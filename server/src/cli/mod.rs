@@ -29,6 +29,24 @@ pub enum Command {
     /// Solve a Siconos LCP file (or mixed LCP, `*_mlcp.dat`) with Lemke and
     /// print the outcome.
     Lcp(LcpArgs),
+    /// Solve a Siconos 3-D frictional-contact file with projected
+    /// Gauss-Seidel on the circular cone.
+    Fc3d(Fc3dArgs),
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct Fc3dArgs {
+    /// The problem file (Siconos format, 3-D).
+    pub file: PathBuf,
+    /// Stop at this natural-map residual (divided by max(||q||, 1)).
+    #[arg(long, default_value_t = 1e-6)]
+    pub tolerance: f64,
+    /// Iteration cap.
+    #[arg(long, default_value_t = 20_000)]
+    pub max_iterations: usize,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -104,5 +122,6 @@ pub fn main() -> ExitCode {
         Command::Run(args) => run::run(&args),
         Command::Plot(args) => run::plot(&args),
         Command::Lcp(args) => lcp::lcp(&args),
+        Command::Fc3d(args) => lcp::fc3d(&args),
     }
 }
