@@ -21,7 +21,7 @@ pub fn num(x: f64) -> String {
 
 pub const STATES_HEADER: &str = "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz";
 pub const IMPULSES_HEADER: &str = "step,t,kind,name,body_a,body_b,px,py,pz";
-pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total";
+pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw";
 
 /// The three CSV files of a run.
 pub struct Writers {
@@ -116,8 +116,10 @@ impl Writers {
         self.impulses.write_all(self.line.as_bytes())
     }
 
-    /// The step report.
-    pub fn step(&mut self, r: &StepReport) -> io::Result<()> {
+    /// The step report; `shadow` is the largest difference of linear (m/s)
+    /// and angular (rad/s) velocities against the other solver, with
+    /// `--shadow` (empty columns without).
+    pub fn step(&mut self, r: &StepReport, shadow: Option<(f64, f64)>) -> io::Result<()> {
         let t = &r.timings;
         let e = &r.energy;
         let fields = [
@@ -144,6 +146,8 @@ impl Writers {
             num(t.integrate),
             num(t.measure),
             num(t.total),
+            shadow.map_or(String::new(), |s| num(s.0)),
+            shadow.map_or(String::new(), |s| num(s.1)),
         ];
         writeln!(self.steps, "{}", fields.join(","))
     }

@@ -251,3 +251,46 @@ fn reference_run_writes_every_file() {
     assert_eq!(summary["failures"], 0);
     assert_eq!(summary["solver"], "lemke");
 }
+
+#[test]
+fn shadow_records_the_other_solvers_velocity_difference() {
+    let dir = TempDir::new("cli-shadow");
+    let out_dir = dir.path().join("out");
+    let out = run(&[
+        "run",
+        "--steps",
+        "200",
+        "--shadow",
+        "--quiet",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let steps = std::fs::read_to_string(out_dir.join("steps.csv")).unwrap();
+    let header: Vec<&str> = steps.lines().next().unwrap().split(',').collect();
+    let col = header
+        .iter()
+        .position(|h| *h == "shadow_dv")
+        .expect("shadow_dv column");
+    let mut rows = 0;
+    for line in steps.lines().skip(1) {
+        let dv: f64 = line
+            .split(',')
+            .nth(col)
+            .unwrap()
+            .parse()
+            .expect("a number on every step");
+        // Lemke and PGS (1e-10) agree on the first 200 steps of the reference scene.
+        assert!(dv < 1e-6, "{line}");
+        rows += 1;
+    }
+    assert_eq!(rows, 200);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("summary.json")).unwrap())
+            .unwrap();
+    assert!(summary["shadow_max_dv"].as_f64().unwrap() < 1e-6);
+}

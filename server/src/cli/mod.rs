@@ -96,6 +96,10 @@ pub struct RunArgs {
     /// Print nothing but errors.
     #[arg(long)]
     pub quiet: bool,
+    /// Solve every step with the other solver too (lemke <-> pgs), from the
+    /// same state, and record the velocity difference in steps.csv.
+    #[arg(long)]
+    pub shadow: bool,
     /// Draw the figures into DIR/plots/ (PNG and SVG).
     #[arg(long)]
     pub plot: bool,

@@ -118,7 +118,7 @@ pub fn run(args: &RunArgs) -> ExitCode {
         );
         return ExitCode::from(EXIT_FAILED);
     }
-    let ok = match simulate(model, scene.step_count(), &out, args.quiet) {
+    let ok = match simulate(model, scene.step_count(), &out, args.quiet, args.shadow) {
         Ok(ok) => ok,
         Err(e) => {
             eprintln!("error: {e}");
@@ -174,9 +174,26 @@ fn draw(dir: &std::path::Path, opts: PlotOptions, quiet: bool) -> Result<(), Exi
 }
 
 /// Runs `steps` steps writing every file; `Ok(false)` when a step failed.
-fn simulate(model: Model, steps: u64, out: &std::path::Path, quiet: bool) -> std::io::Result<bool> {
+fn simulate(
+    model: Model,
+    steps: u64,
+    out: &std::path::Path,
+    quiet: bool,
+    shadow: bool,
+) -> std::io::Result<bool> {
     let started = Instant::now();
     let mut writers = Writers::create(out)?;
+    // The shadow: the same model with the other solver, restarted from the
+    // main run's state before every step.
+    let mut shadow_engine = shadow.then(|| {
+        let mut m = model.clone();
+        m.params.solver = match m.params.solver {
+            cosim_shared::SolverChoice::Lemke => cosim_shared::SolverChoice::Pgs,
+            cosim_shared::SolverChoice::Pgs => cosim_shared::SolverChoice::Lemke,
+        };
+        Engine::new(m)
+    });
+    let mut shadow_max = (0.0f64, 0.0f64);
     let mut engine = Engine::new(model);
     let energy_initial = crate::engine::measure::energy(engine.model(), engine.state());
     writers.state(&engine)?;
@@ -184,13 +201,31 @@ fn simulate(model: Model, steps: u64, out: &std::path::Path, quiet: bool) -> std
     let progress = !quiet && std::io::stderr().is_terminal() && steps >= 2000;
     let mut last_report = None;
     for k in 0..steps {
+        if let Some(s) = shadow_engine.as_mut() {
+            s.set_state(engine.state().clone());
+        }
         let report = engine.step();
         tally.add(&report);
         if report.ok() {
             writers.state(&engine)?;
             writers.impulses(&engine)?;
         }
-        writers.step(&report)?;
+        let diff = shadow_engine.as_mut().and_then(|s| {
+            if !(s.step().ok() && report.ok()) {
+                return None;
+            }
+            let d = engine
+                .state()
+                .bodies
+                .iter()
+                .zip(&s.state().bodies)
+                .fold((0.0f64, 0.0f64), |d, (a, b)| {
+                    (d.0.max((a.v - b.v).norm()), d.1.max((a.w - b.w).norm()))
+                });
+            shadow_max = (shadow_max.0.max(d.0), shadow_max.1.max(d.1));
+            Some(d)
+        });
+        writers.step(&report, diff)?;
         last_report = Some(report);
         if !report.ok() {
             break;
@@ -236,6 +271,8 @@ fn simulate(model: Model, steps: u64, out: &std::path::Path, quiet: bool) -> std
         "max_residual": tally.max_residual,
         "resolves": tally.resolves,
         "regularized_solves": tally.regularized,
+        "shadow_max_dv": shadow.then_some(shadow_max.0),
+        "shadow_max_dw": shadow.then_some(shadow_max.1),
         "energy_initial": energy_initial.total,
         "energy_final": energy_final.total,
         "energy_midpoint_initial": energy_initial.midpoint,
@@ -275,6 +312,12 @@ fn simulate(model: Model, steps: u64, out: &std::path::Path, quiet: bool) -> std
             }
         );
         println!("LCP          largest {} unknowns, {} pivots in all, worst residual {:.1e}, {} re-solves, {} regularised solves", tally.max_lcp_size, tally.pivots, tally.max_residual, tally.resolves, tally.regularized);
+        if shadow {
+            println!(
+                "shadow       largest velocity difference to the other solver {:.2e} m/s, {:.2e} rad/s",
+                shadow_max.0, shadow_max.1
+            );
+        }
         println!(
             "failures     {}{}",
             tally.failures,

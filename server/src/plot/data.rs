@@ -99,7 +99,7 @@ impl RunData {
             for (name, v) in header.iter().zip(&cols) {
                 if let Ok(x) = v.parse::<f64>() {
                     data.steps.entry(name.clone()).or_default().push(x);
-                } else if name != "solver" && name != "status" {
+                } else if !v.is_empty() && name != "solver" && name != "status" {
                     return Err(PlotError::Read(format!(
                         "steps.csv:{}: {name} = {v:?} is not a number",
                         k + 2
