@@ -59,6 +59,9 @@ pub enum SolverChoice {
     Lemke,
     /// Projected Gauss-Seidel with a proximal step on the mixed problem.
     Pgs,
+    /// Lemke, with PGS as the fallback when Lemke fails and alone on large
+    /// problems; the step report says which ran and why.
+    Auto,
 }
 
 impl SolverChoice {
@@ -66,6 +69,7 @@ impl SolverChoice {
         match self {
             SolverChoice::Lemke => "lemke",
             SolverChoice::Pgs => "pgs",
+            SolverChoice::Auto => "auto",
         }
     }
 }
@@ -76,8 +80,9 @@ impl std::str::FromStr for SolverChoice {
         match s {
             "lemke" => Ok(SolverChoice::Lemke),
             "pgs" => Ok(SolverChoice::Pgs),
+            "auto" => Ok(SolverChoice::Auto),
             other => Err(format!(
-                "unknown solver {other:?}, expected one of: lemke, pgs"
+                "unknown solver {other:?}, expected one of: lemke, pgs, auto"
             )),
         }
     }

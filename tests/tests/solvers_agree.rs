@@ -33,3 +33,22 @@ fn pgs_agrees_with_lemke_on_the_reference_scene() {
     assert!(compared >= 1900);
     assert!(worst < 1e-6, "PGS and Lemke differ by {worst} m/s");
 }
+
+/// `auto` runs Lemke on problems of the reference scene's size (far below
+/// `AUTO_PGS_SIZE`), so it reproduces Lemke's trajectory to the bit, and its
+/// report says which solver ran.
+#[test]
+fn auto_is_lemke_on_small_problems_and_says_so() {
+    let scene = scenes::reference().expect("built-in scene");
+    let mut lemke = Engine::new(Model::from_scene(&scene));
+    let mut model = Model::from_scene(&scene);
+    model.params.solver = SolverChoice::Auto;
+    let mut auto = Engine::new(model);
+    for _ in 0..1000 {
+        lemke.step();
+        let r = auto.step();
+        assert_eq!(r.solver, "lemke (auto)");
+        assert!(r.lcp_size <= cosim_server::engine::AUTO_PGS_SIZE);
+    }
+    assert_eq!(lemke.state(), auto.state());
+}

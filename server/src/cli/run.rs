@@ -188,7 +188,9 @@ fn simulate(
     let mut shadow_engine = shadow.then(|| {
         let mut m = model.clone();
         m.params.solver = match m.params.solver {
-            cosim_shared::SolverChoice::Lemke => cosim_shared::SolverChoice::Pgs,
+            cosim_shared::SolverChoice::Lemke | cosim_shared::SolverChoice::Auto => {
+                cosim_shared::SolverChoice::Pgs
+            }
             cosim_shared::SolverChoice::Pgs => cosim_shared::SolverChoice::Lemke,
         };
         Engine::new(m)
