@@ -5,5 +5,6 @@
 pub mod scene;
 
 pub use scene::{
-    BodyDesc, CameraDesc, JointDesc, JointKind, PlaneDesc, Scene, SceneError, SimDesc, SolverChoice,
+    BodyDesc, CameraDesc, FrictionCone, JointDesc, JointKind, PlaneDesc, Scene, SceneError,
+    SimDesc, SolverChoice,
 };

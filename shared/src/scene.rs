@@ -88,6 +88,17 @@ impl std::str::FromStr for SolverChoice {
     }
 }
 
+/// The friction cone of the step.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum FrictionCone {
+    /// `n_d` directions, `p_f >= 0, sum p_f <= mu p_n` (the notes; Lemke).
+    #[default]
+    Polyhedral,
+    /// Isotropic `|p_t| <= mu p_n` (prox PGS only).
+    Circular,
+}
+
 /// `[sim]`: the time stepping.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -110,6 +121,9 @@ pub struct SimDesc {
     pub friction_directions: usize,
     #[serde(default)]
     pub solver: SolverChoice,
+    /// Friction cone: "polyhedral" (default) or "circular" (solver "pgs").
+    #[serde(default)]
+    pub friction_cone: FrictionCone,
     /// Stabilisation factor on penetration and joint error, in (0, 1].
     #[serde(default = "default_beta")]
     pub beta: f64,
@@ -316,6 +330,15 @@ impl Scene {
                 format!(
                     "= {}: must be between 3 and 64 (an even number keeps straight sliding exact)",
                     sim.friction_directions
+                ),
+            ));
+        }
+        if sim.friction_cone == FrictionCone::Circular && sim.solver != SolverChoice::Pgs {
+            return Err(err(
+                "sim.friction_cone".into(),
+                format!(
+                    "= \"circular\" needs solver = \"pgs\" (solver is {:?}): Lemke's LCP has the polyhedral cone",
+                    sim.solver.as_str()
                 ),
             ));
         }
@@ -552,6 +575,18 @@ position = [0.0, 0.0, 0.5]
         assert_eq!(s.step_count(), 1000);
         // Written out and read back, it is the same scene.
         assert_eq!(Scene::parse(&s.to_toml(), "again.toml"), Ok(s));
+    }
+
+    #[test]
+    fn circular_cone_needs_pgs() {
+        let text = MINIMAL.replace(
+            "duration = 1.0",
+            "duration = 1.0\nfriction_cone = \"circular\"",
+        );
+        let e = Scene::parse(&text, "t.toml").unwrap_err();
+        assert_eq!(e.field, "sim.friction_cone", "{e}");
+        let ok = text.replace("friction_cone", "solver = \"pgs\"\nfriction_cone");
+        assert!(Scene::parse(&ok, "t.toml").is_ok());
     }
 
     #[test]

@@ -382,6 +382,7 @@ impl Engine {
                                 m: &m.lcp_m,
                                 q: &m.lcp_q,
                             },
+                            circular: p.friction_cone == cosim_shared::FrictionCone::Circular,
                         };
                         let info = self.pgs.solve(
                             &problem,

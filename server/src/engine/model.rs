@@ -1,7 +1,7 @@
 //! The compiled scene: immutable while the simulation runs (MuJoCo's
 //! `mjModel`). Everything that changes lives in [`State`](super::State).
 
-use cosim_shared::{Scene, SolverChoice};
+use cosim_shared::{FrictionCone, Scene, SolverChoice};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 /// A body's shape. Another shape is a new variant, an inertia function below
@@ -76,6 +76,7 @@ pub struct Params {
     pub gravity: Vector3<f64>,
     pub friction_directions: usize,
     pub solver: SolverChoice,
+    pub friction_cone: FrictionCone,
     pub beta: f64,
     pub restitution_threshold: f64,
     pub contact_margin: f64,
@@ -203,6 +204,7 @@ impl Model {
                 gravity: v3(s.gravity),
                 friction_directions: s.friction_directions,
                 solver: s.solver,
+                friction_cone: s.friction_cone,
                 beta: s.beta,
                 restitution_threshold: s.restitution_threshold,
                 contact_margin: s.contact_margin,

@@ -64,6 +64,8 @@ pub struct PgsProblem<'a> {
     pub nu_free: &'a [f64],
     /// The reduced LCP in `[p_n; p_f; s]`, for the residual.
     pub lcp: Lcp<'a>,
+    /// The isotropic cone `|p_t| <= mu p_n` instead of the polyhedral one.
+    pub circular: bool,
 }
 
 /// How the iteration ended.
@@ -116,6 +118,18 @@ pub fn project_polygon(x: [f64; 2], cap: f64, nd: usize) -> [f64; 2] {
         }
     }
     best
+}
+
+/// The point of the disc of radius `cap` nearest to `x`.
+pub fn project_disc(x: [f64; 2], cap: f64) -> [f64; 2] {
+    let r = (x[0] * x[0] + x[1] * x[1]).sqrt();
+    if r <= cap.max(0.0) {
+        x
+    } else if cap <= 0.0 {
+        [0.0, 0.0]
+    } else {
+        [x[0] * cap / r, x[1] * cap / r]
+    }
 }
 
 /// Writes the 2-D tangential impulse `p` as nonnegative impulses on the two
@@ -233,7 +247,11 @@ impl Pgs {
                     pt[1] - omega * (inv[1][0] * v[0] + inv[1][1] * v[1]),
                 ];
                 let cap = p.mu[f] * lambda[p.nb + i];
-                let new = project_polygon(target, cap, p.nd);
+                let new = if p.circular {
+                    project_disc(target, cap)
+                } else {
+                    project_polygon(target, cap, p.nd)
+                };
                 let delta = [new[0] - pt[0], new[1] - pt[1]];
                 if delta != [0.0, 0.0] {
                     t1.apply(delta[0], p.minv, nu);
@@ -278,7 +296,9 @@ impl Pgs {
         }
         debug_assert_eq!(z.len(), m + p.friction_of.len());
         let qn = p.lcp.q.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let lcp_abs = if p.lcp.n > 0 {
+        let lcp_abs = if p.circular {
+            self.coulomb_residual(p, lambda, nu)
+        } else if p.lcp.n > 0 {
             relative_residual(&p.lcp, z) * if qn > 0.0 { qn } else { 1.0 }
         } else {
             0.0
@@ -303,6 +323,54 @@ impl Pgs {
         } else {
             abs
         }
+    }
+}
+
+impl Pgs {
+    /// Absolute natural-map Coulomb residual of the circular cone with De
+    /// Saxce's change of variable (as for the corpus' 3-D problems): per
+    /// contact `r - proj_K(r - (u + mu |u_T| e_N))`, `r = [p_n, p_t]`,
+    /// `u = [v_n + a_n, v_t]`; normal rows without friction contribute their
+    /// complementarity residual.
+    fn coulomb_residual(&self, p: &PgsProblem, lambda: &[f64], nu: &[f64]) -> f64 {
+        let mut sum = 0.0;
+        for i in 0..p.nc {
+            let k = p.nb + i;
+            let un = p.rows[k].velocity(nu) + p.offset[k];
+            let pn = lambda[k];
+            match p.friction_of.iter().position(|&row| row == i) {
+                None => {
+                    let r = pn - (pn - un).max(0.0);
+                    sum += r * r;
+                }
+                Some(f) => {
+                    let base = p.nb + p.nc + f * p.nd;
+                    let (t1, t2, _) = &self.tangent[f];
+                    let ut = [t1.velocity(nu), t2.velocity(nu)];
+                    let mut pt = [0.0, 0.0];
+                    for j in 0..p.nd {
+                        let (c, s) = direction(j, p.nd);
+                        pt[0] += lambda[base + j] * c;
+                        pt[1] += lambda[base + j] * s;
+                    }
+                    let mu = p.mu[f];
+                    let un_hat = un + mu * (ut[0] * ut[0] + ut[1] * ut[1]).sqrt();
+                    let x = [pn - un_hat, pt[0] - ut[0], pt[1] - ut[1]];
+                    // Projection onto |x_t| <= mu x_n.
+                    let (xn, xt) = (x[0], (x[1] * x[1] + x[2] * x[2]).sqrt());
+                    let y = if xt <= mu * xn {
+                        x
+                    } else if mu * xt <= -xn {
+                        [0.0; 3]
+                    } else {
+                        let a = (mu * xt + xn) / (1.0 + mu * mu);
+                        [a, mu * a * x[1] / xt, mu * a * x[2] / xt]
+                    };
+                    sum += (pn - y[0]).powi(2) + (pt[0] - y[1]).powi(2) + (pt[1] - y[2]).powi(2);
+                }
+            }
+        }
+        sum.sqrt()
     }
 }
 
