@@ -392,18 +392,7 @@ pub fn read_fc3d(text: &str) -> Result<FcProblem, FormatError> {
     Ok(FcProblem { nc, w, q, mu })
 }
 
-/// Projection onto the second-order cone `||r_T|| <= mu r_N`.
-pub fn project_cone(r: [f64; 3], mu: f64) -> [f64; 3] {
-    let (rn, rt) = (r[0], (r[1] * r[1] + r[2] * r[2]).sqrt());
-    if rt <= mu * rn {
-        r
-    } else if mu * rt <= -rn {
-        [0.0; 3]
-    } else {
-        let a = (mu * rt + rn) / (1.0 + mu * mu);
-        [a, mu * a * r[1] / rt, mu * a * r[2] / rt]
-    }
-}
+pub use crate::engine::solver::pgs::project_cone;
 
 /// How a frictional-contact solve ended.
 #[derive(Debug, Clone, PartialEq)]

@@ -120,6 +120,31 @@ pub fn project_polygon(x: [f64; 2], cap: f64, nd: usize) -> [f64; 2] {
     best
 }
 
+/// The 2-D tangential impulse of a friction block: `sum_j p_j d_j`.
+fn tangential(block: &[f64]) -> [f64; 2] {
+    let mut pt = [0.0, 0.0];
+    for (j, p) in block.iter().enumerate() {
+        let (c, s) = direction(j, block.len());
+        pt[0] += p * c;
+        pt[1] += p * s;
+    }
+    pt
+}
+
+/// Projection onto the second-order cone `||r_T|| <= mu r_N`, `r = [r_N,
+/// r_T1, r_T2]`.
+pub fn project_cone(r: [f64; 3], mu: f64) -> [f64; 3] {
+    let (rn, rt) = (r[0], (r[1] * r[1] + r[2] * r[2]).sqrt());
+    if rt <= mu * rn {
+        r
+    } else if mu * rt <= -rn {
+        [0.0; 3]
+    } else {
+        let a = (mu * rt + rn) / (1.0 + mu * mu);
+        [a, mu * a * r[1] / rt, mu * a * r[2] / rt]
+    }
+}
+
 /// The point of the disc of radius `cap` nearest to `x`.
 pub fn project_disc(x: [f64; 2], cap: f64) -> [f64; 2] {
     let r = (x[0] * x[0] + x[1] * x[1]).sqrt();
@@ -236,12 +261,7 @@ impl Pgs {
                 let base = p.nb + p.nc + f * p.nd;
                 let (t1, t2, inv) = &self.tangent[f];
                 let v = [t1.velocity(nu), t2.velocity(nu)];
-                let mut pt = [0.0, 0.0];
-                for j in 0..p.nd {
-                    let (c, s) = direction(j, p.nd);
-                    pt[0] += lambda[base + j] * c;
-                    pt[1] += lambda[base + j] * s;
-                }
+                let pt = tangential(&lambda[base..base + p.nd]);
                 let target = [
                     pt[0] - omega * (inv[0][0] * v[0] + inv[0][1] * v[1]),
                     pt[1] - omega * (inv[1][0] * v[0] + inv[1][1] * v[1]),
@@ -347,25 +367,11 @@ impl Pgs {
                     let base = p.nb + p.nc + f * p.nd;
                     let (t1, t2, _) = &self.tangent[f];
                     let ut = [t1.velocity(nu), t2.velocity(nu)];
-                    let mut pt = [0.0, 0.0];
-                    for j in 0..p.nd {
-                        let (c, s) = direction(j, p.nd);
-                        pt[0] += lambda[base + j] * c;
-                        pt[1] += lambda[base + j] * s;
-                    }
+                    let pt = tangential(&lambda[base..base + p.nd]);
                     let mu = p.mu[f];
                     let un_hat = un + mu * (ut[0] * ut[0] + ut[1] * ut[1]).sqrt();
                     let x = [pn - un_hat, pt[0] - ut[0], pt[1] - ut[1]];
-                    // Projection onto |x_t| <= mu x_n.
-                    let (xn, xt) = (x[0], (x[1] * x[1] + x[2] * x[2]).sqrt());
-                    let y = if xt <= mu * xn {
-                        x
-                    } else if mu * xt <= -xn {
-                        [0.0; 3]
-                    } else {
-                        let a = (mu * xt + xn) / (1.0 + mu * mu);
-                        [a, mu * a * x[1] / xt, mu * a * x[2] / xt]
-                    };
+                    let y = project_cone(x, mu);
                     sum += (pn - y[0]).powi(2) + (pt[0] - y[1]).powi(2) + (pt[1] - y[2]).powi(2);
                 }
             }
