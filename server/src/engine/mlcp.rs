@@ -172,6 +172,7 @@ impl Mlcp {
         contacts: &[Contact],
         minv: &[InvMass],
         nu_free: &[f64],
+        matrix_free: bool,
     ) -> Result<(), MlcpError> {
         let p = &model.params;
         let nd = p.friction_directions;
@@ -220,11 +221,15 @@ impl Mlcp {
         self.nd = nd;
         self.offset.resize(self.rows.len(), 0.0);
 
-        // Delassus matrix W = G^T M^-1 G (symmetric).
+        // Delassus matrix W = G^T M^-1 G (symmetric). The iterative solver
+        // (`matrix_free`) needs only the joint rows' part, for the joints'
+        // response in the free normal speeds; the O(m^2) contact block is
+        // Lemke's alone.
         let r = self.rows.len();
+        let upto = if matrix_free { self.nb } else { r };
         self.w.clear();
         self.w.resize(r * r, 0.0);
-        for k in 0..r {
+        for k in 0..upto {
             for l in k..r {
                 let v = self.rows[k].coupling(&self.rows[l], minv);
                 self.w[k * r + l] = v;
@@ -233,7 +238,11 @@ impl Mlcp {
         }
 
         self.reduce_joints()?;
-        self.form_lcp(contacts, p);
+        if matrix_free {
+            self.form_rhs(contacts, p);
+        } else {
+            self.form_lcp(contacts, p);
+        }
         Ok(())
     }
 
@@ -305,6 +314,28 @@ impl Mlcp {
             Par::Seq,
         );
         Ok(())
+    }
+
+    /// The pure LCP's right-hand side `q` alone (no matrix): what the
+    /// iterative solver needs for its normal offsets and residual scale.
+    fn form_rhs(&mut self, contacts: &[Contact], p: &Params) {
+        let (nb, r) = (self.nb, self.rows.len());
+        let m = r - nb;
+        let n = self.lcp_size();
+        self.lcp_m.clear();
+        self.lcp_q.clear();
+        self.lcp_q.resize(n, 0.0);
+        for i in 0..m {
+            let yi = &self.y[i * nb..(i + 1) * nb];
+            let schur: f64 = yi.iter().zip(&self.yb).map(|(a, b)| a * b).sum();
+            self.lcp_q[i] = self.b[nb + i] - schur;
+        }
+        for i in 0..self.nc {
+            let c = &contacts[self.lcp_contacts[i]];
+            let a_n = normal_offset(c, self.lcp_q[i], p);
+            self.lcp_q[i] += a_n;
+            self.offset[nb + i] = a_n;
+        }
     }
 
     /// Forms the pure LCP from `W - Y^T Y` and `b - Y^T y_b`.

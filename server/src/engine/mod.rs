@@ -38,11 +38,12 @@ use nalgebra::Vector3;
 use solver::{Lcp, Lemke, LemkeError, Pgs, PgsParams, PgsProblem};
 
 /// With `solver = "auto"`, LCPs larger than this go to PGS alone. Measured
-/// on piles of spheres in a box (h = 5e-3, n_d = 8, this machine): Lemke took
-/// 1.1 ms per step at n = 150 (PGS 8.4 ms) and 75 ms at n = 590 (PGS 135 ms);
-/// Lemke grows like n^3 (the tableau), PGS as built now like n^2 (it still
-/// forms the Delassus matrix for its residual), so they cross near n = 1000.
-pub const AUTO_PGS_SIZE: usize = 1000;
+/// on piles of spheres in a box (h = 5e-3, n_d = 8, 200 steps, this
+/// machine), PGS at its default tolerance against Lemke: 9.0 ms against
+/// 1.1 ms per step at n = 150, 71 ms against 75 ms at n = 590. Lemke grows
+/// like n^3 (the tableau), matrix-free PGS like its sweeps times n: they
+/// cross near n = 600.
+pub const AUTO_PGS_SIZE: usize = 600;
 use std::time::Instant;
 
 /// What an impulse row of the output describes.
@@ -309,7 +310,14 @@ impl Engine {
             {
                 let _span = tracing::trace_span!("assemble").entered();
                 ws.mlcp
-                    .build(model, &self.state, &ws.contacts, &ws.minv, &ws.nu_free)
+                    .build(
+                        model,
+                        &self.state,
+                        &ws.contacts,
+                        &ws.minv,
+                        &ws.nu_free,
+                        model.params.solver == SolverChoice::Pgs,
+                    )
                     .map_err(StepError::Mlcp)?;
             }
             let t1 = Instant::now();

@@ -20,7 +20,7 @@
 //! Matrix-free: the velocities are kept up to date (`nu = nu_free + M^-1 G
 //! lambda`), so a row costs O(1) and no Delassus matrix is needed.
 
-use super::{relative_residual, Lcp};
+use super::Lcp;
 use crate::engine::applied::InvMass;
 use crate::engine::rows::Row;
 
@@ -62,7 +62,8 @@ pub struct PgsProblem<'a> {
     pub mu: &'a [f64],
     pub minv: &'a [InvMass],
     pub nu_free: &'a [f64],
-    /// The reduced LCP in `[p_n; p_f; s]`, for the residual.
+    /// The reduced LCP's `q` (its matrix may be empty: the residual is
+    /// computed matrix-free), for the residual's scale.
     pub lcp: Lcp<'a>,
     /// The isotropic cone `|p_t| <= mu p_n` instead of the polyhedral one.
     pub circular: bool,
@@ -118,6 +119,36 @@ pub fn project_polygon(x: [f64; 2], cap: f64, nd: usize) -> [f64; 2] {
         }
     }
     best
+}
+
+/// The absolute natural-map residual `||z - max(0, z - w)||` of the reduced
+/// LCP at `z = [p_n; p_f; s]`, with `w` computed matrix-free from the
+/// velocities `nu` (which carry the joints' response): normal rows
+/// `G_n^T nu + a_n`, friction rows `G_f^T nu + E s`, slack rows
+/// `mu p_n - E^T p_f`. It equals Lemke's measure when the joint rows are
+/// solved exactly.
+fn natural_map(p: &PgsProblem, z: &[f64], nu: &[f64]) -> f64 {
+    let m = p.rows.len() - p.nb;
+    let term = |zi: f64, wi: f64| {
+        let r = zi - (zi - wi).max(0.0);
+        r * r
+    };
+    let mut sum = 0.0;
+    for i in 0..p.nc {
+        let k = p.nb + i;
+        sum += term(z[i], p.rows[k].velocity(nu) + p.offset[k]);
+    }
+    for (f, &i) in p.friction_of.iter().enumerate() {
+        let s = z[m + f];
+        let mut total = 0.0;
+        for j in 0..p.nd {
+            let row = p.nc + f * p.nd + j;
+            total += z[row];
+            sum += term(z[row], p.rows[p.nb + row].velocity(nu) + s);
+        }
+        sum += term(s, p.mu[f] * z[i] - total);
+    }
+    sum.sqrt()
 }
 
 /// The 2-D tangential impulse of a friction block: `sum_j p_j d_j`.
@@ -318,10 +349,8 @@ impl Pgs {
         let qn = p.lcp.q.iter().map(|x| x * x).sum::<f64>().sqrt();
         let lcp_abs = if p.circular {
             self.coulomb_residual(p, lambda, nu)
-        } else if p.lcp.n > 0 {
-            relative_residual(&p.lcp, z) * if qn > 0.0 { qn } else { 1.0 }
         } else {
-            0.0
+            natural_map(p, z, nu)
         };
         let joint_abs2: f64 = (0..p.nb)
             .map(|k| {
