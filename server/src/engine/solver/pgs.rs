@@ -134,9 +134,9 @@ fn natural_map(p: &PgsProblem, z: &[f64], nu: &[f64]) -> f64 {
         r * r
     };
     let mut sum = 0.0;
-    for i in 0..p.nc {
+    for (i, &pn) in z[..p.nc].iter().enumerate() {
         let k = p.nb + i;
-        sum += term(z[i], p.rows[k].velocity(nu) + p.offset[k]);
+        sum += term(pn, p.rows[k].velocity(nu) + p.offset[k]);
     }
     for (f, &i) in p.friction_of.iter().enumerate() {
         let s = z[m + f];
