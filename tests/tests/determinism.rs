@@ -36,3 +36,30 @@ fn restoring_a_snapshot_replays_the_same_bits() {
     }
     assert_eq!(fresh.state(), &end);
 }
+
+/// The iterative solver's warm start is part of the state, so a restored
+/// PGS run repeats its bits too.
+#[test]
+fn restoring_a_snapshot_replays_pgs_too() {
+    let scene = scenes::reference().expect("built-in scene");
+    let mut model = Model::from_scene(&scene);
+    model.params.solver = cosim_shared::SolverChoice::Pgs;
+    let mut e = Engine::new(model);
+    for _ in 0..300 {
+        e.step();
+    }
+    let snapshot = e.state().clone();
+    assert!(
+        snapshot.warm_normal.iter().any(|&p| p > 0.0)
+            || snapshot.warm_joint.iter().any(|&p| p != 0.0)
+    );
+    for _ in 0..300 {
+        e.step();
+    }
+    let end = e.state().clone();
+    e.set_state(snapshot);
+    for _ in 0..300 {
+        e.step();
+    }
+    assert_eq!(e.state(), &end);
+}

@@ -95,10 +95,6 @@ pub struct Engine {
     lemke: Lemke,
     pgs: Pgs,
     pgs_params: PgsParams,
-    /// Warm start of the iterative solver: the last step's normal impulse
-    /// of every potential contact (by its canonical index) and joint impulses.
-    warm_normal: Vec<f64>,
-    warm_joint: Vec<f64>,
     prepared: bool,
     collision_time: f64,
 }
@@ -107,12 +103,9 @@ impl Engine {
     pub fn new(model: Model) -> Engine {
         let state = State::initial(&model);
         let inputs = Inputs::new(&model);
-        let (contacts, joints) = (model.potential_contacts(), model.joints.len());
         Engine {
             pgs: Pgs::default(),
             pgs_params: PgsParams::default(),
-            warm_normal: vec![0.0; contacts],
-            warm_joint: vec![0.0; 3 * joints],
             model,
             state,
             inputs,
@@ -371,9 +364,9 @@ impl Engine {
                         // contact identity from the last step.
                         m.lambda.clear();
                         m.lambda.resize(m.rows.len(), 0.0);
-                        m.lambda[..m.nb].copy_from_slice(&self.warm_joint);
+                        m.lambda[..m.nb].copy_from_slice(&self.state.warm_joint);
                         for (i, &ci) in m.lcp_contacts.iter().enumerate() {
-                            m.lambda[m.nb + i] = self.warm_normal[ws.contacts[ci].id];
+                            m.lambda[m.nb + i] = self.state.warm_normal[ws.contacts[ci].id];
                         }
                         let problem = PgsProblem {
                             rows: &m.rows,
@@ -435,10 +428,10 @@ impl Engine {
         let ws = &mut self.ws;
         let m = &ws.mlcp;
         ws.impulses.clear();
-        self.warm_joint.copy_from_slice(&m.p_b);
-        self.warm_normal.fill(0.0);
+        self.state.warm_joint.copy_from_slice(&m.p_b);
+        self.state.warm_normal.fill(0.0);
         for (i, &ci) in m.lcp_contacts.iter().enumerate() {
-            self.warm_normal[ws.contacts[ci].id] = m.z[i];
+            self.state.warm_normal[ws.contacts[ci].id] = m.z[i];
         }
         for (j, joint) in self.model.joints.iter().enumerate() {
             let p = Vector3::new(m.p_b[3 * j], m.p_b[3 * j + 1], m.p_b[3 * j + 2]);

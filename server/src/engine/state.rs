@@ -20,6 +20,12 @@ pub struct State {
     /// Simulated time (s): `step * h`, kept as a product so it never drifts.
     pub t: f64,
     pub bodies: Vec<BodyState>,
+    /// Warm start of the iterative solver, part of the state so that a
+    /// snapshot is complete and a restored PGS run repeats its bits: the
+    /// last step's normal impulse of every potential contact (by canonical
+    /// index) and joint impulses (3 per joint).
+    pub warm_normal: Vec<f64>,
+    pub warm_joint: Vec<f64>,
 }
 
 impl State {
@@ -37,6 +43,8 @@ impl State {
                     w: b.angular_velocity,
                 })
                 .collect(),
+            warm_normal: vec![0.0; model.potential_contacts()],
+            warm_joint: vec![0.0; 3 * model.joints.len()],
         }
     }
 }
