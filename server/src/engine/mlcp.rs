@@ -225,15 +225,18 @@ impl Mlcp {
         // (`matrix_free`) needs only the joint rows' part, for the joints'
         // response in the free normal speeds; the O(m^2) contact block is
         // Lemke's alone.
+        // Row-major, so the joint rows' part is the first nb rows of W.
         let r = self.rows.len();
         let upto = if matrix_free { self.nb } else { r };
         self.w.clear();
-        self.w.resize(r * r, 0.0);
+        self.w.resize(upto * r, 0.0);
         for k in 0..upto {
             for l in k..r {
                 let v = self.rows[k].coupling(&self.rows[l], minv);
                 self.w[k * r + l] = v;
-                self.w[l * r + k] = v;
+                if l < upto {
+                    self.w[l * r + k] = v;
+                }
             }
         }
 
@@ -330,6 +333,7 @@ impl Mlcp {
             let schur: f64 = yi.iter().zip(&self.yb).map(|(a, b)| a * b).sum();
             self.lcp_q[i] = self.b[nb + i] - schur;
         }
+        // Gap terms: the free normal velocity includes the joints' response.
         for i in 0..self.nc {
             let c = &contacts[self.lcp_contacts[i]];
             let a_n = normal_offset(c, self.lcp_q[i], p);
@@ -338,15 +342,14 @@ impl Mlcp {
         }
     }
 
-    /// Forms the pure LCP from `W - Y^T Y` and `b - Y^T y_b`.
+    /// Forms the pure LCP: `q` as [`Mlcp::form_rhs`] does, the matrix from
+    /// `W - Y^T Y` with `E`, `-E^T` and `U`.
     fn form_lcp(&mut self, contacts: &[Contact], p: &Params) {
+        self.form_rhs(contacts, p);
         let (nb, r) = (self.nb, self.rows.len());
         let m = r - nb;
         let n = self.lcp_size();
-        self.lcp_m.clear();
         self.lcp_m.resize(n * n, 0.0);
-        self.lcp_q.clear();
-        self.lcp_q.resize(n, 0.0);
         for i in 0..m {
             let yi = &self.y[i * nb..(i + 1) * nb];
             for j in 0..m {
@@ -354,27 +357,17 @@ impl Mlcp {
                 let schur: f64 = yi.iter().zip(yj).map(|(a, b)| a * b).sum();
                 self.lcp_m[i * n + j] = self.w[(nb + i) * r + nb + j] - schur;
             }
-            let schur: f64 = yi.iter().zip(&self.yb).map(|(a, b)| a * b).sum();
-            self.lcp_q[i] = self.b[nb + i] - schur;
-        }
-        // Gap terms: the free normal velocity includes the joints' response.
-        for i in 0..self.nc {
-            let c = &contacts[self.lcp_contacts[i]];
-            let a_n = normal_offset(c, self.lcp_q[i], p);
-            self.lcp_q[i] += a_n;
-            self.offset[nb + i] = a_n;
         }
         // E and its transpose, U: friction rows of contact f sit at
         // nc + f nd ..; its slack s_f at m + f.
-        for (f, &i) in self.friction_of.iter().enumerate() {
-            let c = &contacts[self.lcp_contacts[i]];
+        for (f, (&i, &mu)) in self.friction_of.iter().zip(&self.mu).enumerate() {
             let s = m + f;
             for j in 0..self.nd {
                 let row = self.nc + f * self.nd + j;
                 self.lcp_m[row * n + s] = 1.0;
                 self.lcp_m[s * n + row] = -1.0;
             }
-            self.lcp_m[s * n + i] = c.mu;
+            self.lcp_m[s * n + i] = mu;
         }
     }
 
