@@ -1,7 +1,644 @@
 //! Client library for controllers and monitors of a `cosim-server`.
 //!
-//! The co-simulation services arrive with the iceoryx2 issue; until then this
-//! crate only re-exports the shared scene and wire definitions so that
-//! clients build against one source of truth.
+//! - [`Connection`]: the control service of a named server (info, pause,
+//!   resume, step, reset, snapshot, restore, shutdown).
+//! - [`Controller`]: joins the lockstep; per step, [`Controller::next_state`]
+//!   then [`Controller::send`].
+//! - [`Monitor`]: reads the state without joining; it never slows the
+//!   server (the state service overwrites the oldest frame of a slow
+//!   reader).
+//!
+//! The bytes on the wire are described in `docs/protocol.md`.
+
+pub mod cli;
+pub mod pd;
 
 pub use cosim_shared as shared;
+pub use cosim_shared::wire::*;
+
+use iceoryx2::node::NodeView;
+use iceoryx2::port::client::Client as RrClient;
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+use std::fmt;
+use std::time::{Duration, Instant};
+
+/// How to wait for the next message.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Default)]
+pub enum WaitMode {
+    /// Busy-poll: the fastest wake-up when each process has a core of its
+    /// own, and the slowest when they share one.
+    Spin,
+    /// Sleep on an iceoryx2 event until woken.
+    Block,
+    /// Spin for a bounded time ([`HYBRID_SPIN`]), then block.
+    #[default]
+    Hybrid,
+}
+
+impl WaitMode {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            WaitMode::Spin => "spin",
+            WaitMode::Block => "block",
+            WaitMode::Hybrid => "hybrid",
+        }
+    }
+}
+
+/// Spinning time of [`WaitMode::Hybrid`] before it blocks: a few step
+/// computations of the reference scene (about 20 us each), so that a
+/// controller on its own core wakes at spinning speed while one sharing a
+/// core yields soon.
+pub const HYBRID_SPIN: Duration = Duration::from_micros(200);
+
+/// What went wrong, with the server or service named.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ClientError {
+    /// No server of this name runs on this machine.
+    NoServer { name: String },
+    /// iceoryx2 refused an operation.
+    Ipc { what: String, detail: String },
+    /// No answer within the timeout.
+    Timeout { what: &'static str, after: Duration },
+    /// The server answered with an error status.
+    Refused { status: u32, message: String },
+    /// The server announced its shutdown.
+    Shutdown,
+    /// SIGINT or SIGTERM arrived while waiting.
+    Interrupted,
+}
+
+impl fmt::Display for ClientError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ClientError::NoServer { name } => write!(
+                f,
+                "no cosim server named '{name}' is running (start one with `cosim-server serve --name {name}`; `cosim list` shows the running ones)"
+            ),
+            ClientError::Ipc { what, detail } => write!(f, "{what}: {detail}"),
+            ClientError::Timeout { what, after } => {
+                write!(f, "no {what} within {:.3} s", after.as_secs_f64())
+            }
+            ClientError::Refused { status, message } => {
+                write!(f, "the server refused (status {status}): {message}")
+            }
+            ClientError::Shutdown => write!(f, "the server shut down"),
+            ClientError::Interrupted => write!(f, "interrupted"),
+        }
+    }
+}
+
+impl std::error::Error for ClientError {}
+
+fn ipc(what: impl Into<String>) -> impl FnOnce(&dyn fmt::Debug) -> ClientError {
+    let what = what.into();
+    move |e| ClientError::Ipc {
+        what,
+        detail: format!("{e:?}"),
+    }
+}
+
+fn service_name(s: &str) -> Result<ServiceName, ClientError> {
+    s.try_into()
+        .map_err(|e| ipc(format!("bad service name '{s}'"))(&e))
+}
+
+/// A node and the control service of one server.
+pub struct Connection {
+    name: String,
+    node: Node<ipc::Service>,
+    control: RrClient<ipc::Service, ControlRequest, (), ControlResponse, ()>,
+    wake: Notifier<ipc::Service>,
+}
+
+/// Default time to wait for a control answer.
+pub const CONTROL_TIMEOUT: Duration = Duration::from_secs(5);
+
+impl Connection {
+    /// Connects to the server `name`: fails with [`ClientError::NoServer`]
+    /// when none runs.
+    pub fn connect(name: &str) -> Result<Connection, ClientError> {
+        let node = NodeBuilder::new()
+            .create::<ipc::Service>()
+            .map_err(|e| ipc("cannot create an iceoryx2 node")(&e))?;
+        let control = node
+            .service_builder(&service_name(&services::control(name))?)
+            .request_response::<ControlRequest, ControlResponse>()
+            .open()
+            .map_err(|e| match e {
+                iceoryx2::service::builder::request_response::RequestResponseOpenError::DoesNotExist => {
+                    ClientError::NoServer { name: name.into() }
+                }
+                e => ipc(format!("cannot open {}", services::control(name)))(&e),
+            })?;
+        let control = control
+            .client_builder()
+            .create()
+            .map_err(|e| ipc("cannot create a control client")(&e))?;
+        let wake = node
+            .service_builder(&service_name(&services::wake(name))?)
+            .event()
+            .open()
+            .map_err(|e| ipc(format!("cannot open {}", services::wake(name)))(&e))?
+            .notifier_builder()
+            .create()
+            .map_err(|e| ipc("cannot create a notifier")(&e))?;
+        Ok(Connection {
+            name: name.into(),
+            node,
+            control,
+            wake,
+        })
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    pub fn node(&self) -> &Node<ipc::Service> {
+        &self.node
+    }
+
+    /// Sends one request and waits for its answer; an error status becomes
+    /// [`ClientError::Refused`].
+    pub fn request(
+        &self,
+        mut req: ControlRequest,
+        timeout: Duration,
+    ) -> Result<ControlResponse, ClientError> {
+        req.version = PROTOCOL_VERSION;
+        let id = self.node.id().value();
+        req.node_id_lo = id as u64;
+        req.node_id_hi = (id >> 64) as u64;
+        req.pid = u64::from(std::process::id());
+        let pending = self
+            .control
+            .send_copy(req)
+            .map_err(|e| ipc("cannot send a control request")(&e))?;
+        // Waking the server is an optimisation: it also polls.
+        let _ = self.wake.notify();
+        let start = Instant::now();
+        loop {
+            if let Some(r) = pending
+                .receive()
+                .map_err(|e| ipc("cannot receive a control response")(&e))?
+            {
+                let r = *r.payload();
+                if r.status != RESP_OK {
+                    return Err(ClientError::Refused {
+                        status: r.status,
+                        message: r.message(),
+                    });
+                }
+                return Ok(r);
+            }
+            if start.elapsed() > timeout {
+                return Err(ClientError::Timeout {
+                    what: "answer from the server",
+                    after: timeout,
+                });
+            }
+            if self.node.wait(Duration::from_micros(50)).is_err() {
+                return Err(ClientError::Interrupted);
+            }
+        }
+    }
+
+    /// Sends a command without data.
+    pub fn command(&self, command: u32) -> Result<ControlResponse, ClientError> {
+        self.request(
+            ControlRequest {
+                command,
+                ..Default::default()
+            },
+            CONTROL_TIMEOUT,
+        )
+    }
+
+    pub fn info(&self) -> Result<ControlResponse, ClientError> {
+        self.command(CMD_INFO)
+    }
+    pub fn pause(&self) -> Result<ControlResponse, ClientError> {
+        self.command(CMD_PAUSE)
+    }
+    pub fn resume(&self) -> Result<ControlResponse, ClientError> {
+        self.command(CMD_RESUME)
+    }
+    pub fn reset(&self) -> Result<ControlResponse, ClientError> {
+        self.command(CMD_RESET)
+    }
+    pub fn snapshot(&self) -> Result<ControlResponse, ClientError> {
+        self.command(CMD_SNAPSHOT)
+    }
+    pub fn shutdown(&self) -> Result<ControlResponse, ClientError> {
+        self.command(CMD_SHUTDOWN)
+    }
+    /// The scene as the server runs it (TOML), streamed in chunks.
+    pub fn scene_toml(&self) -> Result<String, ClientError> {
+        let mut req = ControlRequest {
+            version: PROTOCOL_VERSION,
+            command: CMD_SCENE,
+            ..Default::default()
+        };
+        let id = self.node.id().value();
+        req.node_id_lo = id as u64;
+        req.node_id_hi = (id >> 64) as u64;
+        let pending = self
+            .control
+            .send_copy(req)
+            .map_err(|e| ipc("cannot send a control request")(&e))?;
+        let _ = self.wake.notify();
+        let start = Instant::now();
+        let mut bytes = Vec::new();
+        let mut total = None;
+        loop {
+            while let Some(r) = pending
+                .receive()
+                .map_err(|e| ipc("cannot receive a control response")(&e))?
+            {
+                let r = *r.payload();
+                if r.status != RESP_OK {
+                    return Err(ClientError::Refused {
+                        status: r.status,
+                        message: r.message(),
+                    });
+                }
+                total = Some(r.value as usize);
+                let end = r
+                    .message
+                    .iter()
+                    .position(|&b| b == 0)
+                    .unwrap_or(MESSAGE_LEN);
+                bytes.extend_from_slice(&r.message[..end]);
+            }
+            if total.is_some_and(|t| bytes.len() >= t) {
+                return String::from_utf8(bytes).map_err(|e| ClientError::Ipc {
+                    what: "the scene is not UTF-8".into(),
+                    detail: e.to_string(),
+                });
+            }
+            if start.elapsed() > CONTROL_TIMEOUT {
+                return Err(ClientError::Timeout {
+                    what: "scene from the server",
+                    after: CONTROL_TIMEOUT,
+                });
+            }
+            if self.node.wait(Duration::from_micros(50)).is_err() {
+                return Err(ClientError::Interrupted);
+            }
+        }
+    }
+
+    /// Takes `n` steps, then pauses.
+    pub fn step(&self, n: u64) -> Result<ControlResponse, ClientError> {
+        self.request(
+            ControlRequest {
+                command: CMD_STEP,
+                count: n,
+                ..Default::default()
+            },
+            CONTROL_TIMEOUT,
+        )
+    }
+    pub fn restore(&self, snapshot: u64) -> Result<ControlResponse, ClientError> {
+        self.request(
+            ControlRequest {
+                command: CMD_RESTORE,
+                count: snapshot,
+                ..Default::default()
+            },
+            CONTROL_TIMEOUT,
+        )
+    }
+}
+
+/// The state subscription with its wake-up event.
+struct StateReader {
+    sub: Subscriber<ipc::Service, StateFrame, ()>,
+    ready: Listener<ipc::Service>,
+}
+
+impl StateReader {
+    fn open(node: &Node<ipc::Service>, name: &str, buffer: usize) -> Result<Self, ClientError> {
+        let sub = node
+            .service_builder(&service_name(&services::state(name))?)
+            .publish_subscribe::<StateFrame>()
+            .open()
+            .map_err(|e| ipc(format!("cannot open {}", services::state(name)))(&e))?
+            .subscriber_builder()
+            .buffer_size(buffer)
+            .create()
+            .map_err(|e| ipc("cannot subscribe to the state")(&e))?;
+        let ready = node
+            .service_builder(&service_name(&services::state_ready(name))?)
+            .event()
+            .open()
+            .map_err(|e| ipc(format!("cannot open {}", services::state_ready(name)))(&e))?
+            .listener_builder()
+            .create()
+            .map_err(|e| ipc("cannot listen for state frames")(&e))?;
+        Ok(StateReader { sub, ready })
+    }
+
+    /// The next frame in the buffer, if any.
+    fn poll(&self) -> Result<Option<StateFrame>, ClientError> {
+        Ok(self
+            .sub
+            .receive()
+            .map_err(|e| ipc("cannot receive the state")(&e))?
+            .map(|s| *s.payload()))
+    }
+
+    /// The newest frame in the buffer, if any (older ones are dropped).
+    fn latest(&self) -> Result<Option<StateFrame>, ClientError> {
+        let mut last = None;
+        while let Some(f) = self.poll()? {
+            last = Some(f);
+        }
+        Ok(last)
+    }
+
+    /// Waits for a frame that `accept` takes, in the given mode.
+    fn wait(
+        &self,
+        node: &Node<ipc::Service>,
+        mode: WaitMode,
+        timeout: Duration,
+        newest: bool,
+        mut accept: impl FnMut(&StateFrame) -> bool,
+    ) -> Result<StateFrame, ClientError> {
+        let start = Instant::now();
+        let spin_for = match mode {
+            WaitMode::Spin => timeout,
+            WaitMode::Block => Duration::ZERO,
+            WaitMode::Hybrid => HYBRID_SPIN.min(timeout),
+        };
+        let mut spins = 0u32;
+        loop {
+            let got = if newest { self.latest()? } else { self.poll()? };
+            if let Some(f) = got {
+                if accept(&f) {
+                    return Ok(f);
+                }
+                continue;
+            }
+            let elapsed = start.elapsed();
+            if elapsed >= timeout {
+                return Err(ClientError::Timeout {
+                    what: "state frame",
+                    after: timeout,
+                });
+            }
+            if elapsed < spin_for {
+                spins = spins.wrapping_add(1);
+                std::hint::spin_loop();
+                // A termination request must still end a spinning wait.
+                if spins.is_multiple_of(4096)
+                    && iceoryx2_bb_posix::signal::SignalHandler::termination_requested()
+                {
+                    return Err(ClientError::Interrupted);
+                }
+                continue;
+            }
+            // NOTE: the frame is published before the event, so a frame
+            // that arrived after the poll above leaves the event pending
+            // and this wait returns at once.
+            let left = timeout - elapsed;
+            self.ready
+                .timed_wait(|_| {}, left.min(Duration::from_millis(100)))
+                .map_err(|e| ipc("cannot wait for the state event")(&e))?;
+            if node.wait(Duration::ZERO).is_err() {
+                return Err(ClientError::Interrupted);
+            }
+        }
+    }
+}
+
+/// A controller in the lockstep.
+pub struct Controller {
+    conn: Connection,
+    id: u32,
+    reader: StateReader,
+    input: Publisher<ipc::Service, InputFrame, ()>,
+    wait: WaitMode,
+    /// The step answered last, so that a frame published again for the same
+    /// step (after a join or a pause) is not answered twice.
+    answered: Option<u64>,
+    last: Option<StateFrame>,
+    sequence: u64,
+    info: ControlResponse,
+}
+
+impl Controller {
+    /// Connects to server `name` and joins its lockstep.
+    pub fn join(name: &str, wait: WaitMode) -> Result<Controller, ClientError> {
+        let conn = Connection::connect(name)?;
+        // Subscribe before joining: the server republishes the state when a
+        // controller joins, and the history keeps the last frame anyway.
+        let reader = StateReader::open(&conn.node, name, 2)?;
+        let input = conn
+            .node
+            .service_builder(&service_name(&services::input(name))?)
+            .publish_subscribe::<InputFrame>()
+            .open()
+            .map_err(|e| ipc(format!("cannot open {}", services::input(name)))(&e))?
+            .publisher_builder()
+            .create()
+            .map_err(|e| ipc("cannot publish inputs")(&e))?;
+        let info = conn.request(
+            ControlRequest {
+                command: CMD_JOIN,
+                role: ROLE_CONTROLLER,
+                ..Default::default()
+            },
+            CONTROL_TIMEOUT,
+        )?;
+        Ok(Controller {
+            id: info.controller_id,
+            conn,
+            reader,
+            input,
+            wait,
+            answered: None,
+            last: None,
+            sequence: 0,
+            info,
+        })
+    }
+
+    pub fn id(&self) -> u32 {
+        self.id
+    }
+
+    /// The join answer: step size, counts, model hash.
+    pub fn info(&self) -> &ControlResponse {
+        &self.info
+    }
+
+    pub fn connection(&self) -> &Connection {
+        &self.conn
+    }
+
+    /// The last frame received.
+    pub fn last_state(&self) -> Option<&StateFrame> {
+        self.last.as_ref()
+    }
+
+    /// Waits for the state of a step not yet answered. A frame with
+    /// `STATUS_SHUTDOWN` ends the session with [`ClientError::Shutdown`].
+    pub fn next_state(&mut self, timeout: Duration) -> Result<StateFrame, ClientError> {
+        let answered = self.answered;
+        let frame = self
+            .reader
+            .wait(&self.conn.node, self.wait, timeout, true, |f| {
+                f.status & STATUS_SHUTDOWN != 0
+                    || (f.status & STATUS_WAITING == 0 && Some(f.step) != answered)
+            })?;
+        self.last = Some(frame);
+        if frame.status & STATUS_SHUTDOWN != 0 {
+            return Err(ClientError::Shutdown);
+        }
+        Ok(frame)
+    }
+
+    /// Sends `input` as the answer to the last state received.
+    pub fn send(&mut self, mut input: InputFrame) -> Result<(), ClientError> {
+        let step = self.last.map_or(0, |f| f.step);
+        input.version = PROTOCOL_VERSION;
+        input.controller_id = self.id;
+        input.step = step;
+        self.sequence += 1;
+        input.sequence = self.sequence;
+        self.send_raw(&input)?;
+        self.answered = Some(step);
+        Ok(())
+    }
+
+    /// Sends a frame as it is (tests use it to send bad inputs).
+    pub fn send_raw(&self, input: &InputFrame) -> Result<(), ClientError> {
+        let sample = self
+            .input
+            .loan_uninit()
+            .map_err(|e| ipc("cannot loan an input sample")(&e))?;
+        sample
+            .write_payload(*input)
+            .send()
+            .map_err(|e| ipc("cannot send the input")(&e))?;
+        let _ = self.conn.wake.notify();
+        Ok(())
+    }
+
+    /// Leaves the lockstep; the server removes this controller's torques.
+    pub fn leave(self) -> Result<(), ClientError> {
+        self.conn
+            .request(
+                ControlRequest {
+                    command: CMD_LEAVE,
+                    controller_id: self.id,
+                    ..Default::default()
+                },
+                CONTROL_TIMEOUT,
+            )
+            .map(|_| ())
+    }
+}
+
+/// A reader of the state outside the lockstep.
+pub struct Monitor {
+    node: Node<ipc::Service>,
+    reader: StateReader,
+}
+
+impl Monitor {
+    /// Subscribes to server `name` with room for `buffer` frames (1 for a
+    /// live view; more for a recorder that wants every frame).
+    pub fn open(name: &str, buffer: usize) -> Result<Monitor, ClientError> {
+        let node = NodeBuilder::new()
+            .create::<ipc::Service>()
+            .map_err(|e| ipc("cannot create an iceoryx2 node")(&e))?;
+        let exists = ipc::Service::does_exist(
+            &service_name(&services::state(name))?,
+            Config::global_config(),
+            MessagingPattern::PublishSubscribe,
+        )
+        .map_err(|e| ipc("cannot look up the state service")(&e))?;
+        if !exists {
+            return Err(ClientError::NoServer { name: name.into() });
+        }
+        let reader = StateReader::open(&node, name, buffer)?;
+        Ok(Monitor { node, reader })
+    }
+
+    /// The newest frame, without waiting.
+    pub fn latest(&self) -> Result<Option<StateFrame>, ClientError> {
+        self.reader.latest()
+    }
+
+    /// The next frame in order (blocking up to `timeout`).
+    pub fn next(&self, timeout: Duration) -> Result<StateFrame, ClientError> {
+        self.reader
+            .wait(&self.node, WaitMode::Block, timeout, false, |_| true)
+    }
+
+    pub fn node(&self) -> &Node<ipc::Service> {
+        &self.node
+    }
+}
+
+/// The servers running on this machine: the names of their control
+/// services whose owner is alive.
+pub fn list_servers() -> Result<Vec<String>, ClientError> {
+    let mut names = Vec::new();
+    ipc::Service::list(Config::global_config(), |details| {
+        let s = details.static_details.name().to_string();
+        if let Some(n) = services::server_of(&s) {
+            names.push(n.to_string());
+        }
+        CallbackProgression::Continue
+    })
+    .map_err(|e| ipc("cannot list the iceoryx2 services")(&e))?;
+    names.sort();
+    names.dedup();
+    Ok(names)
+}
+
+/// Whether the node with this id is alive: `Some(true)` alive,
+/// `Some(false)` dead or gone, `None` when it cannot be told.
+pub fn node_alive(id: u128) -> Option<bool> {
+    let mut found = None;
+    let listed = Node::<ipc::Service>::list(Config::global_config(), |state| {
+        if state.node_id().value() == id {
+            found = Some(match &state {
+                NodeState::Alive(_) => Some(true),
+                NodeState::Dead(_) => Some(false),
+                NodeState::Inaccessible(_) | NodeState::Undefined(_) => None,
+            });
+            return CallbackProgression::Stop;
+        }
+        CallbackProgression::Continue
+    });
+    match (listed, found) {
+        (Err(_), _) => None,
+        (Ok(()), None) => Some(false),
+        (Ok(()), Some(s)) => s,
+    }
+}
+
+/// The pid of a node, for messages.
+pub fn node_pid(id: u128) -> Option<u32> {
+    let mut pid = None;
+    let _ = Node::<ipc::Service>::list(Config::global_config(), |state| {
+        if state.node_id().value() == id {
+            if let NodeState::Alive(v) = &state {
+                pid = v.details().as_ref().map(|d| d.process_id().value() as u32);
+            }
+            return CallbackProgression::Stop;
+        }
+        CallbackProgression::Continue
+    });
+    pid
+}

@@ -7,3 +7,4 @@ pub mod engine;
 pub mod output;
 pub mod plot;
 pub mod scenes;
+pub mod serve;

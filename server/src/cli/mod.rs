@@ -2,6 +2,7 @@
 
 mod lcp;
 mod run;
+pub mod serve;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -32,6 +33,18 @@ pub enum Command {
     /// Solve a Siconos 3-D frictional-contact file with projected
     /// Gauss-Seidel on the circular cone.
     Fc3d(Fc3dArgs),
+    /// Serve a scene over iceoryx2: controllers step in lockstep, monitors
+    /// watch (see docs/protocol.md).
+    Serve(serve::ServeArgs),
+    /// The reference scene with a PD controller in a separate process, 5 s
+    /// in lockstep; writes the outputs, figures and animation.
+    Demo(serve::DemoArgs),
+    /// Re-run a serve session from its folder and check every state bit for
+    /// bit.
+    Replay(serve::ReplayArgs),
+    /// The demo's PD controller (started by `demo`).
+    #[command(hide = true)]
+    PdController(serve::PdArgs),
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -117,8 +130,9 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     tracing_subscriber::fmt()
         .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
+                tracing_subscriber::EnvFilter::new("warn,iceoryx2_bb_loggers=error")
+            }),
         )
         .with_writer(std::io::stderr)
         .init();
@@ -127,5 +141,9 @@ pub fn main() -> ExitCode {
         Command::Plot(args) => run::plot(&args),
         Command::Lcp(args) => lcp::lcp(&args),
         Command::Fc3d(args) => lcp::fc3d(&args),
+        Command::Serve(args) => serve::serve(&args),
+        Command::Demo(args) => serve::demo(&args),
+        Command::Replay(args) => serve::replay(&args),
+        Command::PdController(args) => serve::pd_controller(&args),
     }
 }

@@ -1,0 +1,460 @@
+//! The `cosim` command: control, monitor and record a running server.
+
+use crate::pd::{self, Gains};
+use crate::{
+    list_servers, ClientError, Connection, ControlResponse, Controller, InputFrame, Monitor,
+    StateFrame, WaitMode, STATUS_PAUSED, STATUS_SHUTDOWN,
+};
+use clap::{Parser, Subcommand};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "cosim",
+    version,
+    about = "Control, watch and record a running cosim-server"
+)]
+pub struct Cli {
+    /// Server name (`cosim-server serve --name NAME`).
+    #[arg(long, global = true, default_value = "default")]
+    pub name: String,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// The servers running on this machine.
+    List,
+    /// Step, time, counts and model hash of the server.
+    Info,
+    /// Stop stepping (controllers stay joined).
+    Pause,
+    /// Go on stepping.
+    Resume,
+    /// Take N steps, then pause.
+    Step { n: u64 },
+    /// Back to the initial state.
+    Reset,
+    /// Keep the current state; prints its snapshot id.
+    Snapshot,
+    /// Go back to a snapshot.
+    Restore { id: u64 },
+    /// Stop the server (it writes its outputs first).
+    Shutdown,
+    /// A live table: step, time, rate, body poses.
+    Monitor {
+        /// Stop after this many seconds of wall time.
+        #[arg(long)]
+        seconds: Option<f64>,
+    },
+    /// Write the server's states as `run` does (scene.toml, states.csv,
+    /// impulses.csv, steps.csv), so that `cosim-server plot DIR` draws them.
+    Record {
+        #[arg(long)]
+        out: PathBuf,
+        /// Stop after this many frames (default: until the server stops).
+        #[arg(long)]
+        frames: Option<u64>,
+    },
+    /// The PD controller of the reference scene (see `cosim_client::pd`).
+    Pd {
+        /// Target elevation of the upper arm (degrees above horizontal).
+        #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+        elevation: f64,
+        /// Leave after this many steps (default: until the server stops).
+        #[arg(long)]
+        steps: Option<u64>,
+        #[arg(long, value_enum, default_value_t = WaitMode::Hybrid)]
+        wait: WaitMode,
+        /// Give up when no state arrives for this long (s).
+        #[arg(long, default_value_t = 30.0)]
+        timeout: f64,
+    },
+    /// Open-loop torques from a CSV file with the header
+    /// `step,joint,tx,ty,tz`: each row is sent at its step and held.
+    Play {
+        file: PathBuf,
+        #[arg(long, value_enum, default_value_t = WaitMode::Hybrid)]
+        wait: WaitMode,
+        #[arg(long, default_value_t = 30.0)]
+        timeout: f64,
+    },
+}
+
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match execute(&cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn print_info(r: &ControlResponse) {
+    println!(
+        "step {} t = {} s (dt {} s), {} bodies, {} joints, {} controllers, {} monitors, {}, model {:016x}, pid {}",
+        r.step,
+        r.sim_time,
+        r.dt,
+        r.body_count,
+        r.joint_count,
+        r.controller_count,
+        r.monitor_count,
+        if r.paused != 0 { "paused" } else { "running" },
+        r.model_hash,
+        r.pid
+    );
+}
+
+fn execute(cli: &Cli) -> Result<(), Box<dyn std::error::Error>> {
+    let name = cli.name.as_str();
+    match &cli.command {
+        Command::List => {
+            let servers = list_servers()?;
+            if servers.is_empty() {
+                println!("no cosim servers running");
+            }
+            for s in servers {
+                match Connection::connect(&s).and_then(|c| c.info()) {
+                    Ok(r) => {
+                        print!("{s:<24} ");
+                        print_info(&r);
+                    }
+                    Err(e) => println!("{s:<24} (not answering: {e})"),
+                }
+            }
+        }
+        Command::Info => print_info(&Connection::connect(name)?.info()?),
+        Command::Pause => print_info(&Connection::connect(name)?.pause()?),
+        Command::Resume => print_info(&Connection::connect(name)?.resume()?),
+        Command::Step { n } => print_info(&Connection::connect(name)?.step(*n)?),
+        Command::Reset => print_info(&Connection::connect(name)?.reset()?),
+        Command::Snapshot => {
+            let r = Connection::connect(name)?.snapshot()?;
+            println!("snapshot {} at step {}", r.value, r.step);
+        }
+        Command::Restore { id } => print_info(&Connection::connect(name)?.restore(*id)?),
+        Command::Shutdown => {
+            Connection::connect(name)?.shutdown()?;
+            println!("server '{name}' is shutting down");
+        }
+        Command::Monitor { seconds } => monitor(name, *seconds)?,
+        Command::Record { out, frames } => {
+            let n = record(name, out, *frames)?;
+            println!("recorded {n} frames into {}", out.display());
+        }
+        Command::Pd {
+            elevation,
+            steps,
+            wait,
+            timeout,
+        } => {
+            let gains = Gains {
+                elevation_deg: *elevation,
+                ..Gains::default()
+            };
+            let out = pd::run(
+                name,
+                &gains,
+                *wait,
+                *steps,
+                Duration::from_secs_f64(*timeout),
+            )?;
+            println!(
+                "pd: {} steps, final elevation {:.3} deg (target {elevation})",
+                out.steps, out.final_elevation_deg
+            );
+        }
+        Command::Play {
+            file,
+            wait,
+            timeout,
+        } => {
+            let n = play(name, file, *wait, Duration::from_secs_f64(*timeout))?;
+            println!("play: {n} steps answered");
+        }
+    }
+    Ok(())
+}
+
+fn monitor(name: &str, seconds: Option<f64>) -> Result<(), ClientError> {
+    let m = Monitor::open(name, 1)?;
+    let start = Instant::now();
+    let mut last: Option<(Instant, u64)> = None;
+    let mut rate = 0.0;
+    loop {
+        if seconds.is_some_and(|s| start.elapsed().as_secs_f64() > s) {
+            return Ok(());
+        }
+        let f = match m.next(Duration::from_millis(500)) {
+            Ok(f) => f,
+            Err(ClientError::Timeout { .. }) => continue,
+            Err(ClientError::Interrupted) => return Ok(()),
+            Err(e) => return Err(e),
+        };
+        // Redraw at most 10 times a second; the frames in between are
+        // dropped (the subscriber holds one).
+        let now = Instant::now();
+        if let Some((t, step)) = last {
+            let dt = now.duration_since(t).as_secs_f64();
+            if dt < 0.1 && f.status & STATUS_SHUTDOWN == 0 {
+                continue;
+            }
+            rate = f.step.saturating_sub(step) as f64 / dt;
+        }
+        last = Some((now, f.step));
+        let mut out = String::new();
+        out.push_str("\x1b[2J\x1b[H");
+        out.push_str(&format!(
+            "cosim '{name}'  step {}  t = {:.4} s  {:.0} steps/s  {} controllers  {}\n",
+            f.step,
+            f.sim_time,
+            rate,
+            f.controller_count,
+            if f.status & STATUS_PAUSED != 0 {
+                "paused"
+            } else {
+                "running"
+            }
+        ));
+        out.push_str("body        x         y         z        |v|       |w|\n");
+        for (i, b) in f.bodies().iter().enumerate() {
+            let n = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            out.push_str(&format!(
+                "{i:<4} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4}\n",
+                b.position[0],
+                b.position[1],
+                b.position[2],
+                n(b.linear_velocity),
+                n(b.angular_velocity)
+            ));
+        }
+        print!("{out}");
+        let _ = std::io::stdout().flush();
+        if f.status & STATUS_SHUTDOWN != 0 {
+            return Ok(());
+        }
+    }
+}
+
+/// Writes the frames as `run` writes its files; returns the frame count.
+pub fn record(
+    name: &str,
+    out: &Path,
+    frames: Option<u64>,
+) -> Result<u64, Box<dyn std::error::Error>> {
+    let conn = Connection::connect(name)?;
+    let toml = conn.scene_toml()?;
+    let scene = cosim_shared::Scene::parse(&toml, "<server scene>")?;
+    let m = Monitor::open(name, crate::services::MAX_STATE_BUFFER)?;
+    std::fs::create_dir_all(out)?;
+    std::fs::write(out.join("scene.toml"), &toml)?;
+    let mut rec = Recorder::create(out, scene)?;
+    let mut count = 0u64;
+    let mut last_seq = None;
+    let mut dropped = 0u64;
+    loop {
+        if frames.is_some_and(|n| count >= n) {
+            break;
+        }
+        let f = match m.next(Duration::from_millis(500)) {
+            Ok(f) => f,
+            Err(ClientError::Timeout { .. }) => continue,
+            Err(ClientError::Interrupted) => break,
+            Err(e) => return Err(e.into()),
+        };
+        if let Some(s) = last_seq {
+            dropped += f.sequence.saturating_sub(s + 1);
+        }
+        last_seq = Some(f.sequence);
+        rec.frame(&f)?;
+        count += 1;
+        if f.status & STATUS_SHUTDOWN != 0 {
+            break;
+        }
+        if count.is_multiple_of(1000) {
+            rec.flush()?;
+        }
+    }
+    rec.flush()?;
+    if dropped > 0 {
+        eprintln!("warning: {dropped} frames were overwritten before they could be read");
+    }
+    Ok(count)
+}
+
+/// The CSV files of a recording, in the formats of `cosim-server run`.
+struct Recorder {
+    scene: cosim_shared::Scene,
+    states: std::io::BufWriter<std::fs::File>,
+    impulses: std::io::BufWriter<std::fs::File>,
+    steps: std::io::BufWriter<std::fs::File>,
+    last_step: Option<u64>,
+}
+
+impl Recorder {
+    fn create(dir: &Path, scene: cosim_shared::Scene) -> std::io::Result<Recorder> {
+        let open = |n: &str, header: &str| -> std::io::Result<_> {
+            let mut w = std::io::BufWriter::new(std::fs::File::create(dir.join(n))?);
+            writeln!(w, "{header}")?;
+            Ok(w)
+        };
+        Ok(Recorder {
+            states: open(
+                "states.csv",
+                "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz",
+            )?,
+            impulses: open("impulses.csv", "step,t,kind,name,body_a,body_b,px,py,pz")?,
+            steps: open(
+                "steps.csv",
+                "step,t,status,residual,lcp_size,active_contacts",
+            )?,
+            scene,
+            last_step: None,
+        })
+    }
+
+    /// One frame; a frame repeating the last step (after a pause or a
+    /// join) is skipped, one going back (reset, restore) starts over in
+    /// the same files.
+    fn frame(&mut self, f: &StateFrame) -> std::io::Result<()> {
+        if self.last_step == Some(f.step) {
+            return Ok(());
+        }
+        self.last_step = Some(f.step);
+        let t = f.sim_time;
+        for (b, desc) in f.bodies().iter().zip(&self.scene.bodies) {
+            write!(self.states, "{},{t},{}", f.step, desc.name)?;
+            for v in b
+                .position
+                .iter()
+                .chain(&b.orientation)
+                .chain(&b.linear_velocity)
+                .chain(&b.angular_velocity)
+            {
+                write!(self.states, ",{v}")?;
+            }
+            writeln!(self.states)?;
+        }
+        if f.step == 0 {
+            return Ok(());
+        }
+        for (j, p) in f.joint_impulses[..(f.joint_count as usize).min(crate::MAX_JOINTS)]
+            .iter()
+            .enumerate()
+        {
+            let Some(joint) = self.scene.joints.get(j) else {
+                continue;
+            };
+            if p.iter().any(|x| *x != 0.0) {
+                writeln!(
+                    self.impulses,
+                    "{},{t},joint,{},{},{},{},{},{}",
+                    f.step, joint.name, joint.body_a, joint.body_b, p[0], p[1], p[2]
+                )?;
+            }
+        }
+        for c in f.contacts() {
+            let a = self
+                .scene
+                .bodies
+                .get(c.body_a as usize)
+                .map_or("?", |b| b.name.as_str());
+            let b = if c.kind_b == crate::CONTACT_PLANE {
+                self.scene.planes.get(c.index_b as usize).map(|p| &p.name)
+            } else {
+                self.scene.bodies.get(c.index_b as usize).map(|b| &b.name)
+            }
+            .map_or("?", |s| s.as_str());
+            for (kind, p) in [("normal", c.normal), ("friction", c.friction)] {
+                if p.iter().any(|x| *x != 0.0) {
+                    writeln!(
+                        self.impulses,
+                        "{},{t},{kind},{a}/{b},{a},{b},{},{},{}",
+                        f.step, p[0], p[1], p[2]
+                    )?;
+                }
+            }
+        }
+        writeln!(
+            self.steps,
+            "{},{t},{},{},{},{}",
+            f.step,
+            if f.solver_status == 0 { "ok" } else { "failed" },
+            f.residual,
+            f.lcp_size,
+            f.contact_count
+        )
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.states.flush()?;
+        self.impulses.flush()?;
+        self.steps.flush()
+    }
+}
+
+/// The open-loop player: rows `step,joint,tx,ty,tz` sent at their step.
+fn play(
+    name: &str,
+    file: &Path,
+    wait: WaitMode,
+    timeout: Duration,
+) -> Result<u64, Box<dyn std::error::Error>> {
+    let text = std::fs::read_to_string(file)
+        .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+    let mut rows: Vec<(u64, u32, [f64; 3])> = Vec::new();
+    for (k, line) in text.lines().enumerate().skip(1) {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let cols: Vec<&str> = line.split(',').map(str::trim).collect();
+        let bad = |what: &str| format!("{}:{}: {what}", file.display(), k + 1);
+        if cols.len() != 5 {
+            return Err(bad("expected 5 columns: step,joint,tx,ty,tz").into());
+        }
+        let step = cols[0]
+            .parse()
+            .map_err(|_| bad(&format!("step = {:?} is not a step number", cols[0])))?;
+        let joint = cols[1]
+            .parse()
+            .map_err(|_| bad(&format!("joint = {:?} is not a joint index", cols[1])))?;
+        let mut tau = [0.0; 3];
+        for (i, t) in tau.iter_mut().enumerate() {
+            *t = cols[2 + i]
+                .parse()
+                .map_err(|_| bad(&format!("torque = {:?} is not a number", cols[2 + i])))?;
+        }
+        rows.push((step, joint, tau));
+    }
+    rows.sort_by_key(|r| r.0);
+    let last = rows.last().map_or(0, |r| r.0);
+    let mut c = Controller::join(name, wait)?;
+    let mut next = 0;
+    let mut answered = 0;
+    loop {
+        let f = match c.next_state(timeout) {
+            Ok(f) => f,
+            Err(ClientError::Shutdown) => break,
+            Err(e) => return Err(e.into()),
+        };
+        let mut input = InputFrame::default();
+        while next < rows.len() && rows[next].0 <= f.step {
+            input.push_torque(rows[next].1, rows[next].2);
+            next += 1;
+        }
+        c.send(input)?;
+        answered += 1;
+        if f.step >= last && next == rows.len() {
+            break;
+        }
+    }
+    c.leave()?;
+    Ok(answered)
+}

@@ -1,0 +1,374 @@
+//! `cosim-server serve`, `demo`, `replay` and the demo's controller.
+
+use super::{RunArgs, EXIT_BAD_INPUT, EXIT_FAILED};
+use crate::plot::{self, PlotOptions};
+use crate::serve::controllers::MissPolicy;
+use crate::serve::replay::{replay as run_replay, ReplayOutcome};
+use crate::serve::{serve as run_serve, Ending, ServeError, ServeOptions};
+use cosim_client::WaitMode;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct ServeArgs {
+    /// Scene file (TOML); the built-in reference scene when omitted.
+    pub scene: Option<PathBuf>,
+    /// Server name: the services live under cosim/NAME/.
+    #[arg(long, default_value = "default")]
+    pub name: String,
+    /// Wait for N controllers to join before the first step.
+    #[arg(long, default_value_t = 0)]
+    pub controllers: usize,
+    /// How long to wait for the controllers' inputs of a step (ms).
+    #[arg(long, default_value_t = 1000.0)]
+    pub deadline_ms: f64,
+    /// What a missed deadline does to that controller's input.
+    #[arg(long, value_enum, default_value_t = MissPolicy::Hold)]
+    pub on_miss: MissPolicy,
+    /// How the server waits for inputs.
+    #[arg(long, value_enum, default_value_t = WaitMode::Hybrid)]
+    pub wait: WaitMode,
+    /// Drop a live controller after this many deadline misses in a row.
+    #[arg(long, default_value_t = 3)]
+    pub drop_after: u32,
+    /// Stop after N steps (default: run until `cosim shutdown` or SIGINT).
+    #[arg(long, conflicts_with = "duration")]
+    pub steps: Option<u64>,
+    /// Stop after this many simulated seconds.
+    #[arg(long, allow_negative_numbers = true)]
+    pub duration: Option<f64>,
+    /// Pace the simulation at FACTOR times real time (default: as fast as
+    /// possible).
+    #[arg(long, allow_negative_numbers = true)]
+    pub realtime: Option<f64>,
+    /// Step h in seconds.
+    #[arg(long, allow_negative_numbers = true)]
+    pub dt: Option<f64>,
+    /// LCP solver.
+    #[arg(long)]
+    pub solver: Option<cosim_shared::SolverChoice>,
+    /// Output folder (default out/serve-NAME): the files of `run`, plus
+    /// inputs.csv and replay.csv.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print nothing but errors.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct DemoArgs {
+    /// Simulated seconds.
+    #[arg(long, default_value_t = 5.0)]
+    pub duration: f64,
+    /// Target elevation of the upper arm (degrees above horizontal).
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    pub elevation: f64,
+    /// Output folder.
+    #[arg(long, default_value = "out/demo")]
+    pub out: PathBuf,
+    /// How server and controller wait.
+    #[arg(long, value_enum, default_value_t = WaitMode::Hybrid)]
+    pub wait: WaitMode,
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct ReplayArgs {
+    /// Output folder of a serve run (scene.toml, replay.csv).
+    pub dir: PathBuf,
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct PdArgs {
+    #[arg(long, default_value = "default")]
+    pub name: String,
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    pub elevation: f64,
+    #[arg(long, value_enum, default_value_t = WaitMode::Hybrid)]
+    pub wait: WaitMode,
+    #[arg(long)]
+    pub steps: Option<u64>,
+}
+
+fn positive(name: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{name} must be a positive number, got {v}"))
+    }
+}
+
+/// Checks the options and the scene; errors name the option or field.
+fn options(args: &ServeArgs) -> Result<(cosim_shared::Scene, ServeOptions), String> {
+    positive("--deadline-ms", args.deadline_ms)?;
+    if let Some(r) = args.realtime {
+        positive("--realtime", r)?;
+    }
+    if let Some(d) = args.duration {
+        positive("--duration", d)?;
+    }
+    if args.drop_after == 0 {
+        return Err("--drop-after must be at least 1".into());
+    }
+    if args.controllers > cosim_shared::wire::MAX_CONTROLLERS {
+        return Err(format!(
+            "--controllers {} exceeds the {} controllers a server takes",
+            args.controllers,
+            cosim_shared::wire::MAX_CONTROLLERS
+        ));
+    }
+    if args.name.is_empty()
+        || !args
+            .name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.')
+    {
+        return Err(format!(
+            "--name {:?}: use letters, digits, '-', '_' and '.'",
+            args.name
+        ));
+    }
+    let run = RunArgs {
+        scene: args.scene.clone(),
+        dt: args.dt,
+        duration: None,
+        steps: None,
+        solver: args.solver,
+        friction_directions: None,
+        full: false,
+        out: None,
+        quiet: true,
+        shadow: false,
+        plot: false,
+        animate: false,
+    };
+    let scene = super::run::load(&run).map_err(|e| e.to_string())?;
+    let steps = args.steps.or_else(|| {
+        args.duration
+            .map(|d| (d / scene.sim.dt).round().max(1.0) as u64)
+    });
+    let opts = ServeOptions {
+        name: args.name.clone(),
+        controllers: args.controllers,
+        deadline: Duration::from_secs_f64(args.deadline_ms / 1e3),
+        on_miss: args.on_miss,
+        wait: args.wait,
+        drop_after: args.drop_after,
+        steps,
+        realtime: args.realtime,
+        out: args
+            .out
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("out").join(format!("serve-{}", args.name))),
+        quiet: args.quiet,
+    };
+    Ok((scene, opts))
+}
+
+pub fn serve(args: &ServeArgs) -> ExitCode {
+    let (scene, opts) = match options(args) {
+        Ok(x) => x,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    let quiet = opts.quiet;
+    let out = opts.out.clone();
+    report(run_serve(&scene, opts), &out, quiet)
+}
+
+fn report(
+    result: Result<(crate::serve::Counters, Ending, f64), ServeError>,
+    out: &std::path::Path,
+    quiet: bool,
+) -> ExitCode {
+    match result {
+        Ok((c, ending, wall)) => {
+            if !quiet {
+                let rejected: u64 = c.inputs_rejected.values().sum();
+                println!(
+                    "served {} steps in {wall:.3} s ({:.0} steps/s), ended by {}; {} controllers joined, {} inputs applied, {rejected} rejected, {} deadline misses",
+                    c.steps,
+                    c.steps as f64 / wall.max(1e-9),
+                    format!("{ending:?}").to_lowercase(),
+                    c.controllers_joined,
+                    c.inputs_applied,
+                    c.deadline_misses
+                );
+                println!("output       {}", out.display());
+            }
+            if ending == Ending::Aborted || c.failures > 0 {
+                ExitCode::from(EXIT_FAILED)
+            } else {
+                ExitCode::SUCCESS
+            }
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(match e {
+                ServeError::TooLarge { .. } => EXIT_BAD_INPUT,
+                _ => EXIT_FAILED,
+            })
+        }
+    }
+}
+
+/// Kills the child when dropped, so that no controller outlives the demo.
+struct Child(std::process::Child);
+
+impl Drop for Child {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+pub fn demo(args: &DemoArgs) -> ExitCode {
+    if let Err(e) = positive("--duration", args.duration) {
+        eprintln!("error: {e}");
+        return ExitCode::from(EXIT_BAD_INPUT);
+    }
+    // A name of its own: two demos at once do not meet.
+    let name = format!("demo-{}", std::process::id());
+    let serve_args = ServeArgs {
+        scene: None,
+        name: name.clone(),
+        controllers: 1,
+        deadline_ms: 2000.0,
+        on_miss: MissPolicy::Hold,
+        wait: args.wait,
+        drop_after: 3,
+        steps: None,
+        duration: Some(args.duration),
+        realtime: None,
+        dt: None,
+        solver: None,
+        out: Some(args.out.clone()),
+        quiet: false,
+    };
+    let (scene, opts) = match options(&serve_args) {
+        Ok(x) => x,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    let exe = match std::env::current_exe() {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("error: cannot find this program to start the controller: {e}");
+            return ExitCode::from(EXIT_FAILED);
+        }
+    };
+    // The controller starts first and retries its join until the server is
+    // up (see `pd_controller`).
+    let child = std::process::Command::new(exe)
+        .args([
+            "pd-controller",
+            "--name",
+            &name,
+            "--elevation",
+            &args.elevation.to_string(),
+            "--wait",
+            args.wait.as_str(),
+        ])
+        .spawn();
+    let mut child = match child {
+        Ok(c) => Child(c),
+        Err(e) => {
+            eprintln!("error: cannot start the PD controller: {e}");
+            return ExitCode::from(EXIT_FAILED);
+        }
+    };
+    println!(
+        "demo: reference scene, PD controller (pid {}) holding the upper arm at {} deg, {} s in lockstep",
+        child.0.id(),
+        args.elevation,
+        args.duration
+    );
+    let out = opts.out.clone();
+    let code = report(run_serve(&scene, opts), &out, false);
+    // The controller ends on the server's last frame.
+    let _ = child.0.wait();
+    if let Err(e) = plot::render(
+        &out,
+        PlotOptions {
+            figures: true,
+            animation: true,
+            stills: 0,
+        },
+    ) {
+        eprintln!("error: {e}");
+        return ExitCode::from(EXIT_FAILED);
+    }
+    println!(
+        "figures      {}/plots/*.png, {}/animation.gif",
+        out.display(),
+        out.display()
+    );
+    code
+}
+
+/// The demo's controller process: joins (retrying while the server
+/// starts), then runs the PD loop until the server shuts down.
+pub fn pd_controller(args: &PdArgs) -> ExitCode {
+    let gains = cosim_client::pd::Gains {
+        elevation_deg: args.elevation,
+        ..Default::default()
+    };
+    let start = std::time::Instant::now();
+    loop {
+        match cosim_client::pd::run(
+            &args.name,
+            &gains,
+            args.wait,
+            args.steps,
+            Duration::from_secs(30),
+        ) {
+            Ok(out) => {
+                println!(
+                    "pd: {} steps, final elevation {:.3} deg (target {})",
+                    out.steps, out.final_elevation_deg, args.elevation
+                );
+                return ExitCode::SUCCESS;
+            }
+            Err(cosim_client::ClientError::NoServer { .. })
+                if start.elapsed() < Duration::from_secs(30) =>
+            {
+                // The server is still creating its services.
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            Err(e) => {
+                eprintln!("error: pd controller: {e}");
+                return ExitCode::from(EXIT_FAILED);
+            }
+        }
+    }
+}
+
+pub fn replay(args: &ReplayArgs) -> ExitCode {
+    match run_replay(&args.dir) {
+        Ok(ReplayOutcome::Identical { steps }) => {
+            println!("replay: {steps} steps, every state identical to the bit");
+            ExitCode::SUCCESS
+        }
+        Ok(ReplayOutcome::Differs {
+            n,
+            step,
+            recorded,
+            replayed,
+        }) => {
+            eprintln!(
+                "error: replay differs at step {} (the {n}-th step of the session): recorded state hash {recorded:016x}, replayed {replayed:016x}",
+                step + 1
+            );
+            ExitCode::from(EXIT_FAILED)
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_BAD_INPUT)
+        }
+    }
+}

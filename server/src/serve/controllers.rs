@@ -1,0 +1,283 @@
+//! The joined controllers, the checks on their inputs and the miss policy.
+//! Pure: no iceoryx2 here, so every rule has a unit test.
+
+use cosim_shared::wire::*;
+
+/// What to do when a controller's input has not arrived by the deadline.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Default)]
+pub enum MissPolicy {
+    /// Keep the controller's last torques (impulses are never repeated).
+    #[default]
+    Hold,
+    /// Set the controller's torques to zero.
+    Zero,
+    /// Pause the simulation until `cosim resume`.
+    Pause,
+    /// Stop the run (outputs are written).
+    Abort,
+}
+
+impl MissPolicy {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MissPolicy::Hold => "hold",
+            MissPolicy::Zero => "zero",
+            MissPolicy::Pause => "pause",
+            MissPolicy::Abort => "abort",
+        }
+    }
+}
+
+/// One joined controller.
+#[derive(Debug, Clone)]
+pub struct Slot {
+    pub id: u32,
+    /// Its iceoryx2 node, to tell dead from slow.
+    pub node_id: u128,
+    pub pid: u64,
+    /// Torques this controller holds, by joint (None: never set).
+    pub held: [Option<[f64; 3]>; MAX_JOINTS],
+    /// Impulses for the coming step.
+    pub impulses: Vec<BodyImpulse>,
+    /// The step it answered last.
+    pub answered: Option<u64>,
+    pub misses: u32,
+    /// `REJECT_*` bits of this step.
+    pub rejected: u32,
+    /// `REJECT_*` bits already logged (each reason is logged once).
+    pub logged: u32,
+    pub missed_now: bool,
+}
+
+impl Slot {
+    pub fn new(id: u32, node_id: u128, pid: u64) -> Slot {
+        Slot {
+            id,
+            node_id,
+            pid,
+            held: [None; MAX_JOINTS],
+            impulses: Vec::with_capacity(MAX_BODIES),
+            answered: None,
+            misses: 0,
+            rejected: 0,
+            logged: 0,
+            missed_now: false,
+        }
+    }
+
+    /// The miss policy's input for this controller.
+    pub fn apply_miss(&mut self, policy: MissPolicy) {
+        self.impulses.clear();
+        if policy == MissPolicy::Zero {
+            for h in self.held.iter_mut().flatten() {
+                *h = [0.0; 3];
+            }
+        }
+    }
+}
+
+/// The sizes inputs are checked against.
+#[derive(Debug, Clone, Copy)]
+pub struct Limits {
+    pub joints: usize,
+    pub bodies: usize,
+}
+
+/// Why an input was not taken, with the reason bit; `answered` says
+/// whether it still counts as the controller's answer to the step (its
+/// step was right, so the server need not wait for the deadline).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Rejection {
+    pub reason: u32,
+    pub answered: bool,
+}
+
+/// Checks an input for step `step` from the controller in `slot`.
+pub fn check(
+    input: &InputFrame,
+    slot: Option<&Slot>,
+    step: u64,
+    lim: Limits,
+) -> Result<(), Rejection> {
+    let reject = |reason, answered| Err(Rejection { reason, answered });
+    if input.version != PROTOCOL_VERSION {
+        return reject(REJECT_VERSION, false);
+    }
+    let Some(slot) = slot else {
+        return reject(REJECT_UNKNOWN_CONTROLLER, false);
+    };
+    if input.step != step {
+        return reject(REJECT_WRONG_STEP, false);
+    }
+    if slot.answered == Some(step) {
+        return reject(REJECT_DUPLICATE, false);
+    }
+    let (nt, ni) = (input.torque_count as usize, input.impulse_count as usize);
+    if nt > MAX_JOINTS || ni > MAX_BODIES {
+        return reject(REJECT_BAD_COUNT, true);
+    }
+    let torques = &input.torques[..nt];
+    let impulses = &input.impulses[..ni];
+    if torques.iter().any(|t| t.joint as usize >= lim.joints)
+        || impulses.iter().any(|b| b.body as usize >= lim.bodies)
+    {
+        return reject(REJECT_UNKNOWN_INDEX, true);
+    }
+    for (i, t) in torques.iter().enumerate() {
+        if torques[..i].iter().any(|u| u.joint == t.joint) {
+            return reject(REJECT_DUPLICATE, true);
+        }
+    }
+    let finite = torques
+        .iter()
+        .all(|t| t.torque.iter().all(|x| x.is_finite()))
+        && impulses
+            .iter()
+            .all(|b| b.linear.iter().chain(&b.angular).all(|x| x.is_finite()));
+    if !finite {
+        return reject(REJECT_NON_FINITE, true);
+    }
+    Ok(())
+}
+
+/// Takes a checked input into the slot.
+pub fn accept(input: &InputFrame, slot: &mut Slot, step: u64) {
+    for t in &input.torques[..input.torque_count as usize] {
+        slot.held[t.joint as usize] = Some(t.torque);
+    }
+    slot.impulses.clear();
+    slot.impulses
+        .extend_from_slice(&input.impulses[..input.impulse_count as usize]);
+    slot.answered = Some(step);
+    slot.misses = 0;
+}
+
+/// The torque of joint `j`: the sum over the controllers that set it, or
+/// the scene's own torque when none did.
+pub fn net_torque(slots: &[Slot], j: usize, scene: [f64; 3]) -> [f64; 3] {
+    let mut any = false;
+    let mut sum = [0.0; 3];
+    for s in slots {
+        if let Some(t) = s.held[j] {
+            any = true;
+            for k in 0..3 {
+                sum[k] += t[k];
+            }
+        }
+    }
+    if any {
+        sum
+    } else {
+        scene
+    }
+}
+
+/// The name of a reason bit.
+pub fn reason_name(bit: u32) -> &'static str {
+    REJECT_REASONS
+        .iter()
+        .find(|(b, _)| *b == bit)
+        .map_or("unknown", |(_, n)| n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const LIM: Limits = Limits {
+        joints: 2,
+        bodies: 2,
+    };
+
+    fn input(step: u64) -> InputFrame {
+        let mut i = InputFrame {
+            controller_id: 1,
+            step,
+            ..Default::default()
+        };
+        i.push_torque(0, [1.0, 2.0, 3.0]);
+        i.push_impulse(1, [0.0, 0.0, 1.0], [0.0; 3]);
+        i
+    }
+
+    fn reason(r: Result<(), Rejection>) -> u32 {
+        r.err().map_or(0, |r| r.reason)
+    }
+
+    #[test]
+    fn each_bad_input_is_rejected_with_its_reason() {
+        let slot = Slot::new(1, 0, 0);
+        assert_eq!(check(&input(5), Some(&slot), 5, LIM), Ok(()));
+        assert_eq!(
+            reason(check(&input(5), None, 5, LIM)),
+            REJECT_UNKNOWN_CONTROLLER
+        );
+        assert_eq!(
+            reason(check(&input(4), Some(&slot), 5, LIM)),
+            REJECT_WRONG_STEP
+        );
+        let mut v = input(5);
+        v.version = 99;
+        assert_eq!(reason(check(&v, Some(&slot), 5, LIM)), REJECT_VERSION);
+        let mut nan = input(5);
+        nan.torques[0].torque[1] = f64::NAN;
+        assert_eq!(reason(check(&nan, Some(&slot), 5, LIM)), REJECT_NON_FINITE);
+        let mut inf = input(5);
+        inf.impulses[0].angular[2] = f64::INFINITY;
+        assert_eq!(reason(check(&inf, Some(&slot), 5, LIM)), REJECT_NON_FINITE);
+        let mut joint = input(5);
+        joint.torques[0].joint = 2;
+        assert_eq!(
+            reason(check(&joint, Some(&slot), 5, LIM)),
+            REJECT_UNKNOWN_INDEX
+        );
+        let mut body = input(5);
+        body.impulses[0].body = 7;
+        assert_eq!(
+            reason(check(&body, Some(&slot), 5, LIM)),
+            REJECT_UNKNOWN_INDEX
+        );
+        let mut twice = input(5);
+        twice.push_torque(0, [0.0; 3]);
+        assert_eq!(reason(check(&twice, Some(&slot), 5, LIM)), REJECT_DUPLICATE);
+        let mut count = input(5);
+        count.torque_count = 1000;
+        assert_eq!(reason(check(&count, Some(&slot), 5, LIM)), REJECT_BAD_COUNT);
+    }
+
+    #[test]
+    fn a_second_answer_to_a_step_is_a_duplicate() {
+        let mut slot = Slot::new(1, 0, 0);
+        accept(&input(5), &mut slot, 5);
+        assert_eq!(
+            reason(check(&input(5), Some(&slot), 5, LIM)),
+            REJECT_DUPLICATE
+        );
+        assert_eq!(check(&input(6), Some(&slot), 6, LIM), Ok(()));
+    }
+
+    #[test]
+    fn torques_are_held_summed_and_fall_back_to_the_scene() {
+        let mut a = Slot::new(1, 0, 0);
+        let mut b = Slot::new(2, 0, 0);
+        accept(&input(0), &mut a, 0);
+        let mut other = InputFrame::default();
+        other.push_torque(0, [0.5, 0.0, 0.0]);
+        accept(&other, &mut b, 0);
+        let slots = [a, b];
+        assert_eq!(net_torque(&slots, 0, [9.0; 3]), [1.5, 2.0, 3.0]);
+        assert_eq!(net_torque(&slots, 1, [9.0; 3]), [9.0; 3]);
+    }
+
+    #[test]
+    fn the_zero_policy_zeroes_and_hold_keeps() {
+        let mut s = Slot::new(1, 0, 0);
+        accept(&input(0), &mut s, 0);
+        s.apply_miss(MissPolicy::Hold);
+        assert_eq!(s.held[0], Some([1.0, 2.0, 3.0]));
+        assert!(s.impulses.is_empty(), "impulses are never repeated");
+        s.apply_miss(MissPolicy::Zero);
+        assert_eq!(s.held[0], Some([0.0; 3]));
+        assert_eq!(s.held[1], None);
+    }
+}

@@ -1,0 +1,840 @@
+//! `cosim-server serve`: the engine behind iceoryx2 services, stepping in
+//! lockstep with its controllers.
+//!
+//! Per step k (the state after k steps):
+//! 1. publish state k and wake the readers;
+//! 2. `Engine::prepare` (collision, contact set) while the controllers
+//!    think;
+//! 3. gather the inputs answering step k until every joined controller
+//!    has answered or the deadline passes; control requests are served in
+//!    the same loop;
+//! 4. misses: the policy's input, dead-node check, drop;
+//! 5. the net inputs into the engine, `Engine::finish`, the outputs.
+//!
+//! The engine stays a pure library: every file and every IPC call is here.
+
+pub mod controllers;
+pub mod frame;
+pub mod log;
+pub mod replay;
+pub mod services;
+
+use crate::engine::{Engine, Model, State, StepReport};
+use crate::output::Writers;
+use controllers::{MissPolicy, Slot};
+use cosim_client::WaitMode;
+use cosim_shared::wire::*;
+use cosim_shared::Scene;
+use nalgebra::Vector3;
+use services::{Request, ServiceError, Services};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// How a serve run is set up.
+#[derive(Debug, Clone)]
+pub struct ServeOptions {
+    pub name: String,
+    /// Wait for this many controllers before the first step.
+    pub controllers: usize,
+    pub deadline: Duration,
+    pub on_miss: MissPolicy,
+    pub wait: WaitMode,
+    /// Consecutive misses after which a live but silent controller is
+    /// dropped.
+    pub drop_after: u32,
+    /// Stop after this many steps (None: until shutdown).
+    pub steps: Option<u64>,
+    /// Pace at this multiple of real time (None: as fast as possible).
+    pub realtime: Option<f64>,
+    pub out: PathBuf,
+    pub quiet: bool,
+}
+
+/// How a serve run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ending {
+    /// `--steps` reached.
+    Steps,
+    /// A shutdown request.
+    Shutdown,
+    /// SIGINT or SIGTERM.
+    Signal,
+    /// A deadline miss under `--on-miss abort`.
+    Aborted,
+}
+
+/// Errors that stop a serve run before or during it.
+#[derive(Debug)]
+pub enum ServeError {
+    Services(ServiceError),
+    /// The scene is larger than the wire types carry.
+    TooLarge {
+        what: &'static str,
+        count: usize,
+        max: usize,
+    },
+    Io(std::io::Error),
+}
+
+impl std::fmt::Display for ServeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ServeError::Services(e) => write!(f, "{e}"),
+            ServeError::TooLarge { what, count, max } => write!(
+                f,
+                "the scene has {count} {what}; a served scene may have at most {max} (the wire types' fixed size)"
+            ),
+            ServeError::Io(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl From<ServiceError> for ServeError {
+    fn from(e: ServiceError) -> Self {
+        ServeError::Services(e)
+    }
+}
+impl From<std::io::Error> for ServeError {
+    fn from(e: std::io::Error) -> Self {
+        ServeError::Io(e)
+    }
+}
+
+/// What a run counted; it becomes `summary.json`.
+#[derive(Debug, Default, Clone)]
+pub struct Counters {
+    pub steps: u64,
+    pub failures: u64,
+    pub controllers_joined: u64,
+    pub controllers_dropped: u64,
+    pub inputs_applied: u64,
+    pub inputs_rejected: BTreeMap<&'static str, u64>,
+    pub deadline_misses: u64,
+    /// Publish of state k to the last input of step k (us), per step with
+    /// controllers.
+    pub round_trips: Vec<f64>,
+    /// Engine compute per step (us).
+    pub step_compute: Vec<f64>,
+    pub max_penetration: f64,
+    pub max_joint_error: f64,
+}
+
+fn percentile(v: &[f64], p: f64) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let i = ((s.len() - 1) as f64 * p).round() as usize;
+    Some(s[i])
+}
+
+/// What the control loop decided.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Flow {
+    Go,
+    Stop(Ending),
+}
+
+struct Server {
+    opts: ServeOptions,
+    svc: Services,
+    engine: Engine,
+    initial: State,
+    snapshots: Vec<State>,
+    toml: String,
+    model_hash: u64,
+    slots: Vec<Slot>,
+    next_id: u32,
+    monitors: u32,
+    paused: bool,
+    /// Steps left of a `step N` command.
+    budget: Option<u64>,
+    /// Requests that change the state wait for the step boundary.
+    deferred: Vec<Request>,
+    shutdown: bool,
+    frame: Box<StateFrame>,
+    sequence: u64,
+    status: u32,
+    last_report: Option<StepReport>,
+    writers: Writers,
+    logs: log::Logs,
+    /// The torque last given to the engine, per joint (replay logs changes).
+    applied: Vec<[f64; 3]>,
+    scene_torque: Vec<[f64; 3]>,
+    c: Counters,
+}
+
+/// Runs a server on `scene` until `--steps`, a shutdown request or a
+/// signal.
+pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64), ServeError> {
+    let model = Model::from_scene(scene);
+    for (what, count, max) in [
+        ("bodies", model.bodies.len(), MAX_BODIES),
+        ("joints", model.joints.len(), MAX_JOINTS),
+    ] {
+        if count > max {
+            return Err(ServeError::TooLarge { what, count, max });
+        }
+    }
+    let toml = scene.to_toml();
+    std::fs::create_dir_all(&opts.out)?;
+    std::fs::write(opts.out.join("scene.toml"), &toml)?;
+    let svc = Services::create(&opts.name)?;
+    let writers = Writers::create(&opts.out)?;
+    let logs = log::Logs::create(&opts.out)?;
+    let engine = Engine::new(model);
+    let scene_torque: Vec<[f64; 3]> = engine
+        .model()
+        .joints
+        .iter()
+        .map(|j| j.torque.into())
+        .collect();
+    let mut s = Server {
+        initial: engine.state().clone(),
+        snapshots: Vec::new(),
+        model_hash: fnv1a(toml.as_bytes()),
+        toml,
+        slots: Vec::with_capacity(MAX_CONTROLLERS),
+        next_id: 1,
+        monitors: 0,
+        paused: false,
+        budget: None,
+        deferred: Vec::new(),
+        shutdown: false,
+        frame: Box::default(),
+        sequence: 0,
+        status: 0,
+        last_report: None,
+        writers,
+        logs,
+        applied: scene_torque.clone(),
+        scene_torque,
+        c: Counters::default(),
+        engine,
+        svc,
+        opts,
+    };
+    let started = Instant::now();
+    let ending = s.run();
+    let wall = started.elapsed().as_secs_f64();
+    // The last frame tells every reader the server is gone.
+    s.status |= STATUS_SHUTDOWN;
+    let _ = s.publish();
+    s.writers.flush()?;
+    s.logs.flush()?;
+    let ending = ending?;
+    s.write_summary(ending, wall)?;
+    Ok((s.c.clone(), ending, wall))
+}
+
+fn terminated() -> bool {
+    iceoryx2_bb_posix::signal::SignalHandler::termination_requested()
+}
+
+impl Server {
+    fn run(&mut self) -> Result<Ending, ServeError> {
+        self.writers.state(&self.engine)?;
+        if self.opts.controllers > 0 {
+            self.status |= STATUS_WAITING;
+        }
+        self.publish()?;
+        if !self.opts.quiet {
+            eprintln!(
+                "serving '{}' on cosim/{}/ ({} bodies, {} joints, h = {} s){}",
+                self.engine.model().name,
+                self.opts.name,
+                self.engine.model().bodies.len(),
+                self.engine.model().joints.len(),
+                self.engine.model().params.h,
+                if self.opts.controllers > 0 {
+                    format!("; waiting for {} controllers", self.opts.controllers)
+                } else {
+                    String::new()
+                }
+            );
+        }
+        // Before the first step: wait for the controllers asked for.
+        while self.slots.len() < self.opts.controllers {
+            if let Flow::Stop(e) = self.serve_requests(false)? {
+                return Ok(e);
+            }
+            if terminated() {
+                return Ok(Ending::Signal);
+            }
+            self.svc.block(Duration::from_millis(50))?;
+        }
+        if self.status & STATUS_WAITING != 0 {
+            self.status &= !STATUS_WAITING;
+            self.publish()?;
+        }
+        let mut pace = Pace::new(self.opts.realtime, self.engine.state().t);
+        loop {
+            if terminated() {
+                return Ok(Ending::Signal);
+            }
+            if let Flow::Stop(e) = self.boundary()? {
+                return Ok(e);
+            }
+            if self.opts.steps.is_some_and(|n| self.c.steps >= n) {
+                return Ok(Ending::Steps);
+            }
+            if self.paused {
+                self.svc.block(Duration::from_millis(50))?;
+                pace = Pace::new(self.opts.realtime, self.engine.state().t);
+                continue;
+            }
+            let k = self.engine.state().step;
+            let published = Instant::now();
+            self.engine.prepare();
+            match self.gather(k, published)? {
+                Flow::Go => {}
+                Flow::Stop(e) => return Ok(e),
+            }
+            if self.paused {
+                // --on-miss pause: this step waits for `resume`.
+                self.publish()?;
+                continue;
+            }
+            self.take_step(k)?;
+            if let Some(b) = self.budget.as_mut() {
+                *b = b.saturating_sub(1);
+                if *b == 0 {
+                    self.budget = None;
+                    self.paused = true;
+                }
+            }
+            self.publish()?;
+            pace.wait(self.engine.state().t);
+        }
+    }
+
+    /// Serves control requests, the deferred ones included; between steps.
+    fn boundary(&mut self) -> Result<Flow, ServeError> {
+        let flow = self.serve_requests(false)?;
+        let deferred = std::mem::take(&mut self.deferred);
+        let mut changed = false;
+        for req in deferred {
+            changed |= self.change_state(&req)?;
+        }
+        if changed {
+            self.publish()?;
+        }
+        if self.shutdown {
+            return Ok(Flow::Stop(Ending::Shutdown));
+        }
+        Ok(flow)
+    }
+
+    /// Publishes the current state with the current status.
+    fn publish(&mut self) -> Result<(), ServeError> {
+        self.sequence += 1;
+        let f = &mut *self.frame;
+        f.status = self.status;
+        if self.paused {
+            f.status |= STATUS_PAUSED;
+        }
+        frame::fill(f, &self.engine, self.last_report.as_ref());
+        f.sequence = self.sequence;
+        f.model_hash = self.model_hash;
+        f.controller_count = self.slots.len() as u32;
+        f.controllers = [ControllerSlot::default(); MAX_CONTROLLERS];
+        for (out, s) in f.controllers.iter_mut().zip(&self.slots) {
+            *out = ControllerSlot {
+                id: s.id,
+                flags: SLOT_JOINED | if s.missed_now { SLOT_MISSED } else { 0 },
+                rejected: s.rejected,
+                misses: s.misses,
+                last_step: s.answered.unwrap_or(0),
+            };
+        }
+        self.svc.publish(f)?;
+        Ok(())
+    }
+
+    /// Step k's inputs: until every controller answered or the deadline.
+    fn gather(&mut self, k: u64, published: Instant) -> Result<Flow, ServeError> {
+        self.status &= !(STATUS_INPUT_REJECTED | STATUS_DEADLINE_MISSED | STATUS_SOLVER_FAILED);
+        for s in &mut self.slots {
+            s.rejected = 0;
+            s.missed_now = false;
+        }
+        if self.slots.is_empty() {
+            return Ok(Flow::Go);
+        }
+        let deadline = published + self.opts.deadline;
+        let spin_until = published
+            + match self.opts.wait {
+                WaitMode::Spin => self.opts.deadline,
+                WaitMode::Block => Duration::ZERO,
+                WaitMode::Hybrid => cosim_client::HYBRID_SPIN,
+            };
+        let mut polls = 0u32;
+        loop {
+            while let Some(input) = self.svc.receive_input()? {
+                self.take_input(&input, k)?;
+            }
+            if self.slots.iter().all(|s| s.answered == Some(k)) {
+                self.c
+                    .round_trips
+                    .push(published.elapsed().as_secs_f64() * 1e6);
+                return Ok(Flow::Go);
+            }
+            // Requests in the same loop: a controller that leaves is not
+            // waited for.
+            polls = polls.wrapping_add(1);
+            if polls.is_multiple_of(64) || self.opts.wait != WaitMode::Spin {
+                if let Flow::Stop(e) = self.serve_requests(true)? {
+                    return Ok(Flow::Stop(e));
+                }
+                if terminated() {
+                    return Ok(Flow::Stop(Ending::Signal));
+                }
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                break;
+            }
+            if now < spin_until {
+                std::hint::spin_loop();
+            } else {
+                self.svc
+                    .block((deadline - now).min(Duration::from_millis(50)))?;
+            }
+        }
+        self.misses(k)
+    }
+
+    /// The policy for the controllers that did not answer step k.
+    fn misses(&mut self, k: u64) -> Result<Flow, ServeError> {
+        let mut dropped = Vec::new();
+        for s in &mut self.slots {
+            if s.answered == Some(k) {
+                continue;
+            }
+            s.misses += 1;
+            s.missed_now = true;
+            self.c.deadline_misses += 1;
+            self.status |= STATUS_DEADLINE_MISSED;
+            s.apply_miss(self.opts.on_miss);
+            let alive = cosim_client::node_alive(s.node_id);
+            if alive == Some(false) {
+                tracing::warn!(
+                    "controller {} (pid {}) died at step {k}; dropped",
+                    s.id,
+                    s.pid
+                );
+                dropped.push(s.id);
+            } else if s.misses >= self.opts.drop_after {
+                tracing::warn!(
+                    "controller {} (pid {}) missed {} deadlines in a row; dropped",
+                    s.id,
+                    s.pid,
+                    s.misses
+                );
+                dropped.push(s.id);
+            } else {
+                tracing::warn!(
+                    "controller {} missed the deadline of step {k} ({} ms): {}",
+                    s.id,
+                    self.opts.deadline.as_millis(),
+                    self.opts.on_miss.as_str()
+                );
+            }
+        }
+        if !dropped.is_empty() {
+            // Reclaim what the dead left in shared memory.
+            self.svc.node.try_cleanup_dead_nodes();
+            self.slots.retain(|s| !dropped.contains(&s.id));
+            self.c.controllers_dropped += dropped.len() as u64;
+        }
+        match self.opts.on_miss {
+            MissPolicy::Abort => {
+                tracing::error!(
+                    "a controller missed the deadline of step {k}; aborting (--on-miss abort)"
+                );
+                Ok(Flow::Stop(Ending::Aborted))
+            }
+            MissPolicy::Pause => {
+                self.paused = true;
+                Ok(Flow::Go)
+            }
+            MissPolicy::Hold | MissPolicy::Zero => Ok(Flow::Go),
+        }
+    }
+
+    fn take_input(&mut self, input: &InputFrame, k: u64) -> Result<(), ServeError> {
+        let lim = controllers::Limits {
+            joints: self.engine.model().joints.len(),
+            bodies: self.engine.model().bodies.len(),
+        };
+        let idx = self.slots.iter().position(|s| s.id == input.controller_id);
+        match controllers::check(input, idx.map(|i| &self.slots[i]), k, lim) {
+            Ok(()) => {
+                if let Some(i) = idx {
+                    controllers::accept(input, &mut self.slots[i], k);
+                }
+                self.c.inputs_applied += 1;
+                self.logs.input(input, "applied")?;
+            }
+            Err(r) => {
+                let name = controllers::reason_name(r.reason);
+                *self.c.inputs_rejected.entry(name).or_default() += 1;
+                self.status |= STATUS_INPUT_REJECTED;
+                self.logs.input(input, name)?;
+                if let Some(i) = idx {
+                    let s = &mut self.slots[i];
+                    s.rejected |= r.reason;
+                    if r.answered {
+                        // The step goes on with the policy's input.
+                        s.answered = Some(k);
+                        s.apply_miss(self.opts.on_miss.min_hold());
+                    }
+                    if s.logged & r.reason == 0 {
+                        s.logged |= r.reason;
+                        tracing::warn!(
+                            "rejected an input of controller {} for step {} ({name}); further ones of this reason are counted, not logged",
+                            s.id,
+                            input.step
+                        );
+                    }
+                } else if input.controller_id != 0 {
+                    tracing::debug!(
+                        "input from unknown controller {} ({name})",
+                        input.controller_id
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The net inputs into the engine, the step, the outputs.
+    fn take_step(&mut self, k: u64) -> Result<(), ServeError> {
+        for j in 0..self.engine.model().joints.len() {
+            let t = controllers::net_torque(&self.slots, j, self.scene_torque[j]);
+            if t != self.applied[j] {
+                self.applied[j] = t;
+                self.logs.torque(k, j, t)?;
+            }
+            // Cannot fail: index in range, values checked finite.
+            let _ = self.engine.set_joint_torque(j, Vector3::from(t));
+        }
+        for s in &self.slots {
+            for b in &s.impulses {
+                self.logs.impulse(k, b.body as usize, b.linear, b.angular)?;
+                let _ = self.engine.add_body_impulse(
+                    b.body as usize,
+                    Vector3::from(b.linear),
+                    Vector3::from(b.angular),
+                );
+            }
+        }
+        for s in &mut self.slots {
+            s.impulses.clear();
+        }
+        let t0 = Instant::now();
+        let report = self.engine.finish();
+        self.c.step_compute.push(t0.elapsed().as_secs_f64() * 1e6);
+        self.logs.step(k, frame::state_hash(&self.engine))?;
+        self.c.steps += 1;
+        self.c.max_penetration = self.c.max_penetration.max(report.max_penetration);
+        self.c.max_joint_error = self.c.max_joint_error.max(report.max_joint_error);
+        if let Some(e) = report.error {
+            self.c.failures += 1;
+            tracing::error!(
+                "step {}: the solver failed ({e}); the state did not advance",
+                k + 1
+            );
+        } else {
+            self.writers.state(&self.engine)?;
+            self.writers.impulses(&self.engine)?;
+        }
+        self.writers.step(&report, None)?;
+        self.last_report = Some(report);
+        if self.c.steps.is_multiple_of(1000) {
+            self.writers.flush()?;
+            self.logs.flush()?;
+        }
+        Ok(())
+    }
+
+    fn respond(&self, req: &Request, mut r: ControlResponse) {
+        let s = self.engine.state();
+        r.step = s.step;
+        r.sim_time = s.t;
+        r.dt = self.engine.model().params.h;
+        r.model_hash = self.model_hash;
+        r.body_count = self.engine.model().bodies.len() as u32;
+        r.joint_count = self.engine.model().joints.len() as u32;
+        r.controller_count = self.slots.len() as u32;
+        r.monitor_count = self.monitors;
+        r.paused = u32::from(self.paused);
+        r.pid = u64::from(std::process::id());
+        if let Err(e) = req.send_copy(r) {
+            tracing::warn!("cannot answer a control request: {e:?}");
+        }
+    }
+
+    fn refuse(&self, req: &Request, status: u32, message: &str) {
+        let mut r = ControlResponse {
+            status,
+            ..Default::default()
+        };
+        r.set_message(message);
+        self.respond(req, r);
+    }
+
+    /// Serves the waiting requests. Inside a step (`in_step`), requests
+    /// that change the state are kept for the step boundary.
+    fn serve_requests(&mut self, in_step: bool) -> Result<Flow, ServeError> {
+        while let Some(req) = self.svc.receive_request()? {
+            let r = *req.payload();
+            if r.version != PROTOCOL_VERSION {
+                self.refuse(
+                    &req,
+                    RESP_BAD_REQUEST,
+                    &format!(
+                        "protocol version {} (this server speaks {PROTOCOL_VERSION})",
+                        r.version
+                    ),
+                );
+                continue;
+            }
+            match r.command {
+                CMD_JOIN => self.join(&req, &r)?,
+                CMD_LEAVE => {
+                    let before = self.slots.len();
+                    self.slots.retain(|s| s.id != r.controller_id);
+                    if self.slots.len() == before {
+                        self.refuse(
+                            &req,
+                            RESP_UNKNOWN_CONTROLLER,
+                            &format!("controller {} is not joined", r.controller_id),
+                        );
+                    } else {
+                        tracing::info!("controller {} left", r.controller_id);
+                        self.respond(&req, ControlResponse::default());
+                    }
+                }
+                CMD_PAUSE => {
+                    self.paused = true;
+                    self.budget = None;
+                    self.respond(&req, ControlResponse::default());
+                }
+                CMD_RESUME => {
+                    self.paused = false;
+                    self.budget = None;
+                    self.respond(&req, ControlResponse::default());
+                }
+                CMD_STEP => {
+                    if r.count == 0 {
+                        self.refuse(&req, RESP_BAD_REQUEST, "step needs a count of at least 1");
+                    } else {
+                        self.paused = false;
+                        self.budget = Some(r.count);
+                        self.respond(&req, ControlResponse::default());
+                    }
+                }
+                CMD_INFO => self.respond(&req, ControlResponse::default()),
+                CMD_SCENE => self.send_scene(&req),
+                CMD_SNAPSHOT => {
+                    self.snapshots.push(self.engine.state().clone());
+                    let id = self.snapshots.len() as u64;
+                    self.logs
+                        .event("snapshot", self.engine.state().step, Some(id))?;
+                    self.respond(
+                        &req,
+                        ControlResponse {
+                            value: id,
+                            ..Default::default()
+                        },
+                    );
+                }
+                CMD_RESET | CMD_RESTORE | CMD_SHUTDOWN => {
+                    if in_step {
+                        self.deferred.push(req);
+                    } else if self.change_state(&req)? {
+                        self.publish()?;
+                    }
+                    if self.shutdown {
+                        return Ok(Flow::Stop(Ending::Shutdown));
+                    }
+                }
+                other => self.refuse(
+                    &req,
+                    RESP_UNKNOWN_COMMAND,
+                    &format!("unknown command {other}"),
+                ),
+            }
+        }
+        Ok(Flow::Go)
+    }
+
+    fn join(&mut self, req: &Request, r: &ControlRequest) -> Result<(), ServeError> {
+        if r.role == ROLE_MONITOR {
+            self.monitors += 1;
+            self.respond(req, ControlResponse::default());
+            return Ok(());
+        }
+        if self.slots.len() >= MAX_CONTROLLERS {
+            self.refuse(
+                req,
+                RESP_FULL,
+                &format!("{MAX_CONTROLLERS} controllers are joined already"),
+            );
+            return Ok(());
+        }
+        let id = self.next_id;
+        self.next_id += 1;
+        let node = u128::from(r.node_id_lo) | (u128::from(r.node_id_hi) << 64);
+        self.slots.push(Slot::new(id, node, r.pid));
+        self.c.controllers_joined += 1;
+        tracing::info!("controller {id} (pid {}) joined", r.pid);
+        self.respond(
+            req,
+            ControlResponse {
+                controller_id: id,
+                ..Default::default()
+            },
+        );
+        // NOTE: a new subscriber is connected when the publisher next
+        // sends: publish the current state again so the joiner has it.
+        self.publish()
+    }
+
+    /// Reset, restore, shutdown; true when the state changed.
+    fn change_state(&mut self, req: &Request) -> Result<bool, ServeError> {
+        let r = *req.payload();
+        let step = self.engine.state().step;
+        match r.command {
+            CMD_RESET => {
+                self.engine.set_state(self.initial.clone());
+                self.logs.event("reset", step, None)?;
+                self.last_report = None;
+                self.writers.state(&self.engine)?;
+                self.respond(req, ControlResponse::default());
+                Ok(true)
+            }
+            CMD_RESTORE => match self.snapshots.get((r.count as usize).wrapping_sub(1)) {
+                Some(s) => {
+                    self.engine.set_state(s.clone());
+                    self.logs.event("restore", step, Some(r.count))?;
+                    self.last_report = None;
+                    self.writers.state(&self.engine)?;
+                    self.respond(req, ControlResponse::default());
+                    Ok(true)
+                }
+                None => {
+                    self.refuse(
+                        req,
+                        RESP_UNKNOWN_SNAPSHOT,
+                        &format!(
+                            "no snapshot {} (there are {})",
+                            r.count,
+                            self.snapshots.len()
+                        ),
+                    );
+                    Ok(false)
+                }
+            },
+            _ => {
+                self.shutdown = true;
+                self.respond(req, ControlResponse::default());
+                Ok(false)
+            }
+        }
+    }
+
+    fn send_scene(&self, req: &Request) {
+        let bytes = self.toml.as_bytes();
+        for chunk in bytes.chunks(MESSAGE_LEN) {
+            let mut r = ControlResponse {
+                value: bytes.len() as u64,
+                ..Default::default()
+            };
+            r.message[..chunk.len()].copy_from_slice(chunk);
+            self.respond(req, r);
+        }
+    }
+
+    fn write_summary(&self, ending: Ending, wall: f64) -> std::io::Result<()> {
+        let c = &self.c;
+        let rt = |p| percentile(&c.round_trips, p);
+        let summary = serde_json::json!({
+            "scene": self.engine.model().name,
+            "name": self.opts.name,
+            "ending": format!("{ending:?}").to_lowercase(),
+            "steps": c.steps,
+            "t_end": self.engine.state().t,
+            "dt": self.engine.model().params.h,
+            "solver": self.engine.model().params.solver.as_str(),
+            "model_hash": format!("{:016x}", self.model_hash),
+            "failures": c.failures,
+            "controllers_joined": c.controllers_joined,
+            "controllers_dropped": c.controllers_dropped,
+            "inputs_applied": c.inputs_applied,
+            "inputs_rejected": c.inputs_rejected,
+            "deadline_misses": c.deadline_misses,
+            "round_trip_us": { "median": rt(0.5), "p99": rt(0.99) },
+            "step_compute_us": { "median": percentile(&c.step_compute, 0.5), "p99": percentile(&c.step_compute, 0.99) },
+            "wait": self.opts.wait.as_str(),
+            "on_miss": self.opts.on_miss.as_str(),
+            "deadline_ms": self.opts.deadline.as_secs_f64() * 1e3,
+            "max_penetration": c.max_penetration,
+            "max_joint_error": c.max_joint_error,
+            "wall_seconds": wall,
+        });
+        std::fs::write(
+            self.opts.out.join("summary.json"),
+            serde_json::to_string_pretty(&summary).unwrap_or_default() + "\n",
+        )
+    }
+}
+
+impl MissPolicy {
+    /// The input a rejected answer gets: the policy's, except that pause
+    /// and abort (which are about silence) hold.
+    fn min_hold(self) -> MissPolicy {
+        match self {
+            MissPolicy::Zero => MissPolicy::Zero,
+            _ => MissPolicy::Hold,
+        }
+    }
+}
+
+/// Pacing against the wall clock for `--realtime`.
+struct Pace {
+    factor: Option<f64>,
+    wall0: Instant,
+    sim0: f64,
+}
+
+impl Pace {
+    fn new(factor: Option<f64>, sim0: f64) -> Pace {
+        Pace {
+            factor,
+            wall0: Instant::now(),
+            sim0,
+        }
+    }
+    fn wait(&self, sim: f64) {
+        let Some(f) = self.factor else { return };
+        let due = self.wall0 + Duration::from_secs_f64(((sim - self.sim0) / f).max(0.0));
+        loop {
+            let now = Instant::now();
+            if now >= due {
+                return;
+            }
+            let left = due - now;
+            // Sleep most of the way, spin the last stretch: sleeps
+            // overshoot by up to a scheduler tick.
+            if left > Duration::from_micros(1500) {
+                std::thread::sleep(left - Duration::from_millis(1));
+            } else {
+                std::hint::spin_loop();
+            }
+        }
+    }
+}
