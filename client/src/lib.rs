@@ -102,6 +102,21 @@ fn ipc(what: impl Into<String>) -> impl FnOnce(&dyn fmt::Debug) -> ClientError {
     }
 }
 
+/// An open error: a missing service means no (complete) server yet, since
+/// a starting server creates its services one after the other.
+fn missing(server: &str, service: &str, e: impl fmt::Debug) -> ClientError {
+    if format!("{e:?}") == "DoesNotExist" {
+        ClientError::NoServer {
+            name: server.into(),
+        }
+    } else {
+        ClientError::Ipc {
+            what: format!("cannot open {service}"),
+            detail: format!("{e:?}"),
+        }
+    }
+}
+
 fn service_name(s: &str) -> Result<ServiceName, ClientError> {
     s.try_into()
         .map_err(|e| ipc(format!("bad service name '{s}'"))(&e))
@@ -143,7 +158,7 @@ impl Connection {
             .service_builder(&service_name(&services::wake(name))?)
             .event()
             .open()
-            .map_err(|e| ipc(format!("cannot open {}", services::wake(name)))(&e))?
+            .map_err(|e| missing(name, &services::wake(name), e))?
             .notifier_builder()
             .create()
             .map_err(|e| ipc("cannot create a notifier")(&e))?;
@@ -328,7 +343,7 @@ impl StateReader {
             .service_builder(&service_name(&services::state(name))?)
             .publish_subscribe::<StateFrame>()
             .open()
-            .map_err(|e| ipc(format!("cannot open {}", services::state(name)))(&e))?
+            .map_err(|e| missing(name, &services::state(name), e))?
             .subscriber_builder()
             .buffer_size(buffer)
             .create()
@@ -337,7 +352,7 @@ impl StateReader {
             .service_builder(&service_name(&services::state_ready(name))?)
             .event()
             .open()
-            .map_err(|e| ipc(format!("cannot open {}", services::state_ready(name)))(&e))?
+            .map_err(|e| missing(name, &services::state_ready(name), e))?
             .listener_builder()
             .create()
             .map_err(|e| ipc("cannot listen for state frames")(&e))?;
@@ -408,9 +423,14 @@ impl StateReader {
             // that arrived after the poll above leaves the event pending
             // and this wait returns at once.
             let left = timeout - elapsed;
-            self.ready
+            match self
+                .ready
                 .timed_wait(|_| {}, left.min(Duration::from_millis(100)))
-                .map_err(|e| ipc("cannot wait for the state event")(&e))?;
+            {
+                // A signal ends the wait; termination is checked below.
+                Ok(_) | Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => {}
+                Err(e) => return Err(ipc("cannot wait for the state event")(&e)),
+            }
             if node.wait(Duration::ZERO).is_err() {
                 return Err(ClientError::Interrupted);
             }
@@ -445,7 +465,7 @@ impl Controller {
             .service_builder(&service_name(&services::input(name))?)
             .publish_subscribe::<InputFrame>()
             .open()
-            .map_err(|e| ipc(format!("cannot open {}", services::input(name)))(&e))?
+            .map_err(|e| missing(name, &services::input(name), e))?
             .publisher_builder()
             .create()
             .map_err(|e| ipc("cannot publish inputs")(&e))?;

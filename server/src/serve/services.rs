@@ -209,9 +209,11 @@ impl Services {
 
     /// Sleeps until a client notifies (an input or a request) or `timeout`.
     pub fn block(&self, timeout: Duration) -> Result<(), ServiceError> {
-        self.wake
-            .timed_wait(|_| {}, timeout)
-            .map_err(|e| err("cannot wait for the wake-up event".into())(&e))?;
-        Ok(())
+        match self.wake.timed_wait(|_| {}, timeout) {
+            // Any signal ends the wait (SIGCHLD of a controller the demo
+            // started, too): the loop checks for termination itself.
+            Ok(_) | Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => Ok(()),
+            Err(e) => Err(err("cannot wait for the wake-up event".into())(&e)),
+        }
     }
 }
