@@ -627,3 +627,31 @@ fn the_demo_holds_the_pendulum_at_its_target() {
     assert_eq!(s["steps"], 3000);
     let _ = STATUS_SHUTDOWN;
 }
+
+/// The Python controller of examples/python, written from docs/protocol.md
+/// with the official iceoryx2 package (.ci/run installs it).
+#[test]
+fn the_python_controller_joins_and_answers_every_step() {
+    let dir = TempDir::new("python");
+    let name = unique("python");
+    let server = ServerProc::start(&name, dir.path(), &["--controllers", "1", "--steps", "500"]);
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/python/controller.py");
+    let out = Command::new("python3")
+        .arg(&script)
+        .args(["--name", &name, "--steps", "100000"])
+        .output()
+        .expect("run python3");
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains("server shut down; answered 501 steps"),
+        "{text}"
+    );
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    let s = summary(dir.path());
+    assert_eq!(s["inputs_applied"], 500, "{s}");
+    assert_eq!(s["inputs_rejected"], serde_json::json!({}));
+    assert_eq!(s["deadline_misses"], 0);
+}

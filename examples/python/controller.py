@@ -1,0 +1,313 @@
+#!/usr/bin/env python3
+"""A cosim controller in Python, written from docs/protocol.md alone.
+
+It uses only the official `iceoryx2` package (pip install iceoryx2==0.10.0)
+and ctypes structures mirroring the wire types. It joins the server NAME,
+answers STEPS steps with a PD torque that holds the reference scene's upper
+arm at a target elevation (gravity compensated), then leaves.
+
+    cosim-server serve --controllers 1 --name lab &
+    python3 examples/python/controller.py --name lab --steps 2000
+"""
+
+import argparse
+import ctypes
+import math
+import os
+import sys
+import time
+
+import iceoryx2 as iox2
+
+MAX_BODIES, MAX_JOINTS, MAX_CONTACTS, MAX_CONTROLLERS = 32, 32, 64, 8
+MESSAGE_LEN = 120
+VERSION = 1
+CMD_JOIN, CMD_LEAVE = 1, 2
+ROLE_CONTROLLER = 1
+STATUS_SHUTDOWN, STATUS_WAITING = 16, 32
+
+
+class BodyFrame(ctypes.Structure):
+    _fields_ = [
+        ("position", ctypes.c_double * 3),
+        ("orientation", ctypes.c_double * 4),
+        ("linear_velocity", ctypes.c_double * 3),
+        ("angular_velocity", ctypes.c_double * 3),
+    ]
+
+
+class ContactFrame(ctypes.Structure):
+    _fields_ = [
+        ("body_a", ctypes.c_uint32),
+        ("kind_b", ctypes.c_uint32),
+        ("index_b", ctypes.c_uint32),
+        ("id", ctypes.c_uint32),
+        ("normal", ctypes.c_double * 3),
+        ("friction", ctypes.c_double * 3),
+    ]
+
+
+class ControllerSlot(ctypes.Structure):
+    _fields_ = [
+        ("id", ctypes.c_uint32),
+        ("flags", ctypes.c_uint32),
+        ("rejected", ctypes.c_uint32),
+        ("misses", ctypes.c_uint32),
+        ("last_step", ctypes.c_uint64),
+    ]
+
+
+class StateFrame(ctypes.Structure):
+    _fields_ = [
+        ("version", ctypes.c_uint32),
+        ("status", ctypes.c_uint32),
+        ("step", ctypes.c_uint64),
+        ("sim_time", ctypes.c_double),
+        ("sequence", ctypes.c_uint64),
+        ("model_hash", ctypes.c_uint64),
+        ("body_count", ctypes.c_uint32),
+        ("joint_count", ctypes.c_uint32),
+        ("contact_count", ctypes.c_uint32),
+        ("controller_count", ctypes.c_uint32),
+        ("solver_status", ctypes.c_uint32),
+        ("lcp_size", ctypes.c_uint32),
+        ("residual", ctypes.c_double),
+        ("dt", ctypes.c_double),
+        ("bodies", BodyFrame * MAX_BODIES),
+        ("joint_impulses", (ctypes.c_double * 3) * MAX_JOINTS),
+        ("contacts", ContactFrame * MAX_CONTACTS),
+        ("controllers", ControllerSlot * MAX_CONTROLLERS),
+    ]
+
+    @staticmethod
+    def type_name() -> str:
+        return "cosim::StateFrame.v1"
+
+
+class JointTorque(ctypes.Structure):
+    _fields_ = [
+        ("joint", ctypes.c_uint32),
+        ("_pad", ctypes.c_uint32),
+        ("torque", ctypes.c_double * 3),
+    ]
+
+
+class BodyImpulse(ctypes.Structure):
+    _fields_ = [
+        ("body", ctypes.c_uint32),
+        ("_pad", ctypes.c_uint32),
+        ("linear", ctypes.c_double * 3),
+        ("angular", ctypes.c_double * 3),
+    ]
+
+
+class InputFrame(ctypes.Structure):
+    _fields_ = [
+        ("version", ctypes.c_uint32),
+        ("controller_id", ctypes.c_uint32),
+        ("step", ctypes.c_uint64),
+        ("sequence", ctypes.c_uint64),
+        ("torque_count", ctypes.c_uint32),
+        ("impulse_count", ctypes.c_uint32),
+        ("torques", JointTorque * MAX_JOINTS),
+        ("impulses", BodyImpulse * MAX_BODIES),
+    ]
+
+    @staticmethod
+    def type_name() -> str:
+        return "cosim::InputFrame.v1"
+
+
+class ControlRequest(ctypes.Structure):
+    _fields_ = [
+        ("version", ctypes.c_uint32),
+        ("command", ctypes.c_uint32),
+        ("role", ctypes.c_uint32),
+        ("controller_id", ctypes.c_uint32),
+        ("count", ctypes.c_uint64),
+        ("node_id_lo", ctypes.c_uint64),
+        ("node_id_hi", ctypes.c_uint64),
+        ("pid", ctypes.c_uint64),
+    ]
+
+    @staticmethod
+    def type_name() -> str:
+        return "cosim::ControlRequest.v1"
+
+
+class ControlResponse(ctypes.Structure):
+    _fields_ = [
+        ("version", ctypes.c_uint32),
+        ("status", ctypes.c_uint32),
+        ("controller_id", ctypes.c_uint32),
+        ("paused", ctypes.c_uint32),
+        ("step", ctypes.c_uint64),
+        ("sim_time", ctypes.c_double),
+        ("dt", ctypes.c_double),
+        ("model_hash", ctypes.c_uint64),
+        ("body_count", ctypes.c_uint32),
+        ("joint_count", ctypes.c_uint32),
+        ("controller_count", ctypes.c_uint32),
+        ("monitor_count", ctypes.c_uint32),
+        ("value", ctypes.c_uint64),
+        ("pid", ctypes.c_uint64),
+        ("message", ctypes.c_uint8 * MESSAGE_LEN),
+    ]
+
+    @staticmethod
+    def type_name() -> str:
+        return "cosim::ControlResponse.v1"
+
+
+# The sizes docs/protocol.md states.
+assert ctypes.sizeof(StateFrame) == 8464
+assert ctypes.sizeof(InputFrame) == 2848
+assert ctypes.sizeof(ControlRequest) == 48
+assert ctypes.sizeof(ControlResponse) == 200
+
+
+class Client:
+    def __init__(self, name: str):
+        self.node = iox2.NodeBuilder.new().create(iox2.ServiceType.Ipc)
+        svc = lambda s: iox2.ServiceName.new(f"cosim/{name}/{s}")
+        control = (
+            self.node.service_builder(svc("control"))
+            .request_response(ControlRequest, ControlResponse)
+            .open()
+        )
+        self.control = control.client_builder().create()
+        self.wake = self.node.service_builder(svc("wake")).event().open().notifier_builder().create()
+        self.ready = (
+            self.node.service_builder(svc("state-ready")).event().open().listener_builder().create()
+        )
+        # Subscribe before joining (protocol.md, Lockstep 1).
+        self.state = (
+            self.node.service_builder(svc("state"))
+            .publish_subscribe(StateFrame)
+            .open()
+            .subscriber_builder()
+            .create()
+        )
+        self.input = (
+            self.node.service_builder(svc("input"))
+            .publish_subscribe(InputFrame)
+            .open()
+            .publisher_builder()
+            .create()
+        )
+        self.id = 0
+
+    def request(self, command: int, **fields) -> ControlResponse:
+        node_id = self.node.id.value
+        req = ControlRequest(
+            version=VERSION,
+            command=command,
+            node_id_lo=node_id & (2**64 - 1),
+            node_id_hi=node_id >> 64,
+            pid=os.getpid(),
+            **fields,
+        )
+        pending = self.control.send_copy(req)
+        self.wake.notify()
+        deadline = time.monotonic() + 5.0
+        while time.monotonic() < deadline:
+            response = pending.receive()
+            if response is not None:
+                r = response.payload().contents
+                if r.status != 0:
+                    msg = bytes(r.message).split(b"\0")[0].decode()
+                    raise RuntimeError(f"server refused (status {r.status}): {msg}")
+                return ControlResponse.from_buffer_copy(r)
+            self.node.wait(iox2.Duration.from_micros(100))
+        raise TimeoutError("no answer from the server")
+
+    def next_state(self, answered, timeout=10.0) -> StateFrame:
+        """The newest frame of a step not yet answered (or the last one)."""
+        deadline = time.monotonic() + timeout
+        while True:
+            newest = None
+            while True:
+                sample = self.state.receive()
+                if sample is None:
+                    break
+                newest = StateFrame.from_buffer_copy(sample.payload().contents)
+            if newest is not None:
+                if newest.status & STATUS_SHUTDOWN:
+                    return newest
+                if not newest.status & STATUS_WAITING and newest.step != answered:
+                    return newest
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise TimeoutError("no state frame")
+            # The frame is published before the event: a frame that landed
+            # after the poll above leaves the event pending.
+            self.ready.timed_wait(iox2.Duration.from_secs_f64(min(left, 0.1)))
+
+    def send(self, frame: InputFrame):
+        sample = self.input.loan_uninit()
+        sample = sample.write_payload(frame)
+        sample.send()
+        self.wake.notify()
+
+
+def cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def pd_torque(frame: StateFrame, elevation_deg: float):
+    """Shoulder torque: PD on the arm direction, plus the chain's gravity moment."""
+    shoulder = (0.0, 0.0, 0.45)
+    masses = (1.0, 0.5)
+    g = (0.0, 0.0, -9.81)
+    kp, kd = 20.0, 3.0
+    upper = frame.bodies[0]
+    r = [upper.position[i] - shoulder[i] for i in range(3)]
+    n = math.sqrt(sum(x * x for x in r))
+    d = [x / n for x in r]
+    e = math.radians(elevation_deg)
+    target = [math.cos(e), 0.0, math.sin(e)]
+    tau = [kp * c for c in cross(d, target)]
+    tau = [tau[i] - kd * upper.angular_velocity[i] for i in range(3)]
+    for b, m in zip(frame.bodies[:2], masses):
+        arm = [b.position[i] - shoulder[i] for i in range(3)]
+        moment = cross(arm, [m * x for x in g])
+        tau = [tau[i] - moment[i] for i in range(3)]
+    return tau, math.degrees(math.asin(d[2]))
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--name", default="default")
+    p.add_argument("--steps", type=int, default=1000)
+    p.add_argument("--elevation", type=float, default=10.0)
+    args = p.parse_args()
+    iox2.set_log_level(iox2.LogLevel.Error)
+
+    client = Client(args.name)
+    joined = client.request(CMD_JOIN, role=ROLE_CONTROLLER)
+    client.id = joined.controller_id
+    print(f"joined '{args.name}' as controller {client.id}: "
+          f"{joined.body_count} bodies, {joined.joint_count} joints, dt {joined.dt}")
+    answered, elevation, sent, shutdown = None, float("nan"), 0, False
+    while sent < args.steps:
+        frame = client.next_state(answered)
+        if frame.status & STATUS_SHUTDOWN:
+            shutdown = True
+            break
+        tau, elevation = pd_torque(frame, args.elevation)
+        out = InputFrame(version=VERSION, controller_id=client.id, step=frame.step,
+                         sequence=sent + 1, torque_count=1)
+        out.torques[0].joint = 0
+        for i in range(3):
+            out.torques[0].torque[i] = tau[i]
+        client.send(out)
+        answered = frame.step
+        sent += 1
+    if not shutdown:
+        client.request(CMD_LEAVE, controller_id=client.id)
+    print(f"{'server shut down; ' if shutdown else ''}answered {sent} steps; elevation {elevation:.3f} deg (target {args.elevation})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
