@@ -644,8 +644,11 @@ fn the_python_controller_joins_and_answers_every_step() {
     let text =
         String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{text}");
+    // Steps 0..=499 are answered; state 500 comes with the shutdown frame
+    // right behind it, so it may be read or skipped.
     assert!(
-        text.contains("server shut down; answered 501 steps"),
+        text.contains("server shut down; answered 500 steps")
+            || text.contains("server shut down; answered 501 steps"),
         "{text}"
     );
     let (status, stderr) = server.finish();
