@@ -42,9 +42,38 @@ pub enum Command {
     /// Re-run a serve session from its folder and check every state bit for
     /// bit.
     Replay(serve::ReplayArgs),
+    /// Benchmarks: `bench ipc` measures lockstep over iceoryx2 against a
+    /// raw ping-pong and a TCP loopback baseline.
+    Bench {
+        #[command(subcommand)]
+        what: BenchWhat,
+    },
+    /// The other process of a benchmark (started by `bench`).
+    #[command(hide = true)]
+    BenchPeer {
+        role: String,
+        #[arg(long)]
+        name: String,
+        #[arg(long, value_enum)]
+        wait: cosim_client::WaitMode,
+    },
     /// The demo's PD controller (started by `demo`).
     #[command(hide = true)]
     PdController(serve::PdArgs),
+}
+
+#[derive(Subcommand, Debug)]
+pub enum BenchWhat {
+    /// Lockstep steps per second over iceoryx2 (1, 2, 4 controllers; spin,
+    /// block, hybrid; with a monitor), the raw ping-pong limit and TCP.
+    Ipc {
+        /// Steps per lockstep measurement.
+        #[arg(long, default_value_t = 20_000)]
+        steps: u64,
+        /// Also write the table to this file.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -145,5 +174,32 @@ pub fn main() -> ExitCode {
         Command::Demo(args) => serve::demo(&args),
         Command::Replay(args) => serve::replay(&args),
         Command::PdController(args) => serve::pd_controller(&args),
+        Command::Bench {
+            what: BenchWhat::Ipc { steps, out },
+        } => match crate::serve::bench::run(steps) {
+            Ok(table) => {
+                print!("{table}");
+                if let Some(path) = out {
+                    if let Err(e) = std::fs::write(&path, &table) {
+                        eprintln!("error: cannot write {}: {e}", path.display());
+                        return ExitCode::from(EXIT_FAILED);
+                    }
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: bench ipc: {e}");
+                ExitCode::from(EXIT_FAILED)
+            }
+        },
+        Command::BenchPeer { role, name, wait } => {
+            match crate::serve::bench::run_peer(&role, &name, wait) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: bench peer {role}: {e}");
+                    ExitCode::from(EXIT_FAILED)
+                }
+            }
+        }
     }
 }

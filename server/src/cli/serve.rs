@@ -52,6 +52,9 @@ pub struct ServeArgs {
     /// inputs.csv and replay.csv.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Write no files (a server that runs for days; benchmarks).
+    #[arg(long, conflicts_with = "out")]
+    pub no_record: bool,
     /// Print nothing but errors.
     #[arg(long)]
     pub quiet: bool,
@@ -157,10 +160,11 @@ fn options(args: &ServeArgs) -> Result<(cosim_shared::Scene, ServeOptions), Stri
         drop_after: args.drop_after,
         steps,
         realtime: args.realtime,
-        out: args
-            .out
-            .clone()
-            .unwrap_or_else(|| PathBuf::from("out").join(format!("serve-{}", args.name))),
+        out: (!args.no_record).then(|| {
+            args.out
+                .clone()
+                .unwrap_or_else(|| PathBuf::from("out").join(format!("serve-{}", args.name)))
+        }),
         quiet: args.quiet,
     };
     Ok((scene, opts))
@@ -176,12 +180,12 @@ pub fn serve(args: &ServeArgs) -> ExitCode {
     };
     let quiet = opts.quiet;
     let out = opts.out.clone();
-    report(run_serve(&scene, opts), &out, quiet)
+    report(run_serve(&scene, opts), out.as_deref(), quiet)
 }
 
 fn report(
     result: Result<(crate::serve::Counters, Ending, f64), ServeError>,
-    out: &std::path::Path,
+    out: Option<&std::path::Path>,
     quiet: bool,
 ) -> ExitCode {
     match result {
@@ -197,7 +201,9 @@ fn report(
                     c.inputs_applied,
                     c.deadline_misses
                 );
-                println!("output       {}", out.display());
+                if let Some(out) = out {
+                    println!("output       {}", out.display());
+                }
             }
             if ending == Ending::Aborted || c.failures > 0 {
                 ExitCode::from(EXIT_FAILED)
@@ -246,6 +252,7 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
         dt: None,
         solver: None,
         out: Some(args.out.clone()),
+        no_record: false,
         quiet: false,
     };
     let (scene, opts) = match options(&serve_args) {
@@ -288,8 +295,8 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
         args.elevation,
         args.duration
     );
-    let out = opts.out.clone();
-    let code = report(run_serve(&scene, opts), &out, false);
+    let out = args.out.clone();
+    let code = report(run_serve(&scene, opts), Some(&out), false);
     // The controller ends on the server's last frame.
     let _ = child.0.wait();
     if let Err(e) = plot::render(

@@ -13,6 +13,7 @@
 //!
 //! The engine stays a pure library: every file and every IPC call is here.
 
+pub mod bench;
 pub mod controllers;
 pub mod frame;
 pub mod log;
@@ -47,7 +48,9 @@ pub struct ServeOptions {
     pub steps: Option<u64>,
     /// Pace at this multiple of real time (None: as fast as possible).
     pub realtime: Option<f64>,
-    pub out: PathBuf,
+    /// Output folder; None writes nothing (a long-running server, or a
+    /// benchmark that measures the loop alone).
+    pub out: Option<PathBuf>,
     pub quiet: bool,
 }
 
@@ -99,6 +102,12 @@ impl From<std::io::Error> for ServeError {
     fn from(e: std::io::Error) -> Self {
         ServeError::Io(e)
     }
+}
+
+/// The files of a run with an output folder.
+struct Files {
+    writers: Writers,
+    logs: log::Logs,
 }
 
 /// What a run counted; it becomes `summary.json`.
@@ -158,8 +167,7 @@ struct Server {
     sequence: u64,
     status: u32,
     last_report: Option<StepReport>,
-    writers: Writers,
-    logs: log::Logs,
+    files: Option<Files>,
     /// The torque last given to the engine, per joint (replay logs changes).
     applied: Vec<[f64; 3]>,
     scene_torque: Vec<[f64; 3]>,
@@ -179,11 +187,18 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         }
     }
     let toml = scene.to_toml();
-    std::fs::create_dir_all(&opts.out)?;
-    std::fs::write(opts.out.join("scene.toml"), &toml)?;
+    if let Some(out) = &opts.out {
+        std::fs::create_dir_all(out)?;
+        std::fs::write(out.join("scene.toml"), &toml)?;
+    }
     let svc = Services::create(&opts.name)?;
-    let writers = Writers::create(&opts.out)?;
-    let logs = log::Logs::create(&opts.out)?;
+    let files = match &opts.out {
+        Some(out) => Some(Files {
+            writers: Writers::create(out)?,
+            logs: log::Logs::create(out)?,
+        }),
+        None => None,
+    };
     let engine = Engine::new(model);
     let scene_torque: Vec<[f64; 3]> = engine
         .model()
@@ -207,8 +222,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         sequence: 0,
         status: 0,
         last_report: None,
-        writers,
-        logs,
+        files,
         applied: scene_torque.clone(),
         scene_torque,
         c: Counters::default(),
@@ -222,8 +236,10 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
     // The last frame tells every reader the server is gone.
     s.status |= STATUS_SHUTDOWN;
     let _ = s.publish();
-    s.writers.flush()?;
-    s.logs.flush()?;
+    if let Some(f) = s.files.as_mut() {
+        f.writers.flush()?;
+        f.logs.flush()?;
+    }
     let ending = ending?;
     s.write_summary(ending, wall)?;
     Ok((s.c.clone(), ending, wall))
@@ -235,7 +251,9 @@ fn terminated() -> bool {
 
 impl Server {
     fn run(&mut self) -> Result<Ending, ServeError> {
-        self.writers.state(&self.engine)?;
+        if let Some(f) = self.files.as_mut() {
+            f.writers.state(&self.engine)?;
+        }
         if self.opts.controllers > 0 {
             self.status |= STATUS_WAITING;
         }
@@ -476,13 +494,17 @@ impl Server {
                     controllers::accept(input, &mut self.slots[i], k);
                 }
                 self.c.inputs_applied += 1;
-                self.logs.input(input, "applied")?;
+                if let Some(f) = self.files.as_mut() {
+                    f.logs.input(input, "applied")?;
+                }
             }
             Err(r) => {
                 let name = controllers::reason_name(r.reason);
                 *self.c.inputs_rejected.entry(name).or_default() += 1;
                 self.status |= STATUS_INPUT_REJECTED;
-                self.logs.input(input, name)?;
+                if let Some(f) = self.files.as_mut() {
+                    f.logs.input(input, name)?;
+                }
                 if let Some(i) = idx {
                     let s = &mut self.slots[i];
                     s.rejected |= r.reason;
@@ -516,14 +538,18 @@ impl Server {
             let t = controllers::net_torque(&self.slots, j, self.scene_torque[j]);
             if t != self.applied[j] {
                 self.applied[j] = t;
-                self.logs.torque(k, j, t)?;
+                if let Some(f) = self.files.as_mut() {
+                    f.logs.torque(k, j, t)?;
+                }
             }
             // Cannot fail: index in range, values checked finite.
             let _ = self.engine.set_joint_torque(j, Vector3::from(t));
         }
         for s in &self.slots {
             for b in &s.impulses {
-                self.logs.impulse(k, b.body as usize, b.linear, b.angular)?;
+                if let Some(f) = self.files.as_mut() {
+                    f.logs.impulse(k, b.body as usize, b.linear, b.angular)?;
+                }
                 let _ = self.engine.add_body_impulse(
                     b.body as usize,
                     Vector3::from(b.linear),
@@ -537,7 +563,9 @@ impl Server {
         let t0 = Instant::now();
         let report = self.engine.finish();
         self.c.step_compute.push(t0.elapsed().as_secs_f64() * 1e6);
-        self.logs.step(k, frame::state_hash(&self.engine))?;
+        if let Some(f) = self.files.as_mut() {
+            f.logs.step(k, frame::state_hash(&self.engine))?;
+        }
         self.c.steps += 1;
         self.c.max_penetration = self.c.max_penetration.max(report.max_penetration);
         self.c.max_joint_error = self.c.max_joint_error.max(report.max_joint_error);
@@ -548,14 +576,24 @@ impl Server {
                 k + 1
             );
         } else {
-            self.writers.state(&self.engine)?;
-            self.writers.impulses(&self.engine)?;
+            if let Some(f) = self.files.as_mut() {
+                f.writers.state(&self.engine)?;
+            }
+            if let Some(f) = self.files.as_mut() {
+                f.writers.impulses(&self.engine)?;
+            }
         }
-        self.writers.step(&report, None)?;
+        if let Some(f) = self.files.as_mut() {
+            f.writers.step(&report, None)?;
+        }
         self.last_report = Some(report);
         if self.c.steps.is_multiple_of(1000) {
-            self.writers.flush()?;
-            self.logs.flush()?;
+            if let Some(f) = self.files.as_mut() {
+                f.writers.flush()?;
+            }
+            if let Some(f) = self.files.as_mut() {
+                f.logs.flush()?;
+            }
         }
         Ok(())
     }
@@ -642,8 +680,10 @@ impl Server {
                 CMD_SNAPSHOT => {
                     self.snapshots.push(self.engine.state().clone());
                     let id = self.snapshots.len() as u64;
-                    self.logs
-                        .event("snapshot", self.engine.state().step, Some(id))?;
+                    if let Some(f) = self.files.as_mut() {
+                        f.logs
+                            .event("snapshot", self.engine.state().step, Some(id))?;
+                    }
                     self.respond(
                         &req,
                         ControlResponse {
@@ -711,18 +751,26 @@ impl Server {
         match r.command {
             CMD_RESET => {
                 self.engine.set_state(self.initial.clone());
-                self.logs.event("reset", step, None)?;
+                if let Some(f) = self.files.as_mut() {
+                    f.logs.event("reset", step, None)?;
+                }
                 self.last_report = None;
-                self.writers.state(&self.engine)?;
+                if let Some(f) = self.files.as_mut() {
+                    f.writers.state(&self.engine)?;
+                }
                 self.respond(req, ControlResponse::default());
                 Ok(true)
             }
             CMD_RESTORE => match self.snapshots.get((r.count as usize).wrapping_sub(1)) {
                 Some(s) => {
                     self.engine.set_state(s.clone());
-                    self.logs.event("restore", step, Some(r.count))?;
+                    if let Some(f) = self.files.as_mut() {
+                        f.logs.event("restore", step, Some(r.count))?;
+                    }
                     self.last_report = None;
-                    self.writers.state(&self.engine)?;
+                    if let Some(f) = self.files.as_mut() {
+                        f.writers.state(&self.engine)?;
+                    }
                     self.respond(req, ControlResponse::default());
                     Ok(true)
                 }
@@ -786,10 +834,13 @@ impl Server {
             "max_joint_error": c.max_joint_error,
             "wall_seconds": wall,
         });
-        std::fs::write(
-            self.opts.out.join("summary.json"),
-            serde_json::to_string_pretty(&summary).unwrap_or_default() + "\n",
-        )
+        match &self.opts.out {
+            Some(out) => std::fs::write(
+                out.join("summary.json"),
+                serde_json::to_string_pretty(&summary).unwrap_or_default() + "\n",
+            ),
+            None => Ok(()),
+        }
     }
 }
 

@@ -1,0 +1,48 @@
+//! The `cosim` command without a server: clear errors, exit code 1.
+
+use std::process::Command;
+
+const EXE: &str = env!("CARGO_BIN_EXE_cosim");
+
+#[test]
+fn commands_against_a_missing_server_name_it_and_fail() {
+    let name = format!("no-such-server-{}", std::process::id());
+    for cmd in [
+        &["info"][..],
+        &["pause"],
+        &["step", "3"],
+        &["monitor", "--seconds", "1"],
+    ] {
+        let out = Command::new(EXE)
+            .args(["--name", &name])
+            .args(cmd)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(1), "{cmd:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains(&format!("no cosim server named '{name}' is running")),
+            "{cmd:?}: {err}"
+        );
+    }
+}
+
+#[test]
+fn a_bad_torque_file_names_the_line_and_field() {
+    let dir = std::env::temp_dir().join(format!("cosim-play-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("torques.csv");
+    std::fs::write(&file, "step,joint,tx,ty,tz\n0,0,0,0,0\n5,1,0,abc,0\n").unwrap();
+    let out = Command::new(EXE)
+        .args(["--name", "unused", "play"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("torques.csv:3: torque = \"abc\" is not a number"),
+        "{err}"
+    );
+}

@@ -1,0 +1,435 @@
+//! `cosim-server bench ipc`: what lockstep costs, measured in one run.
+//!
+//! - the limit: a raw iceoryx2 ping-pong of a state frame and an input
+//!   frame between two processes (spinning, and blocking on events);
+//! - lockstep steps per second on the reference scene with 1, 2 and 4
+//!   controller processes in spin, block and hybrid waiting;
+//! - the same with a monitor process reading every frame;
+//! - the baseline: the same lockstep over a TCP loopback socket, what a
+//!   socket-based (gRPC-style) co-simulation pays at the least.
+//!
+//! Controllers and peers are this program started again with the hidden
+//! `bench-peer` subcommand, so every figure crosses a process boundary.
+
+use super::{serve, ServeOptions};
+use crate::engine::{Engine, Model};
+use cosim_client::{Controller, InputFrame, Monitor, WaitMode};
+use cosim_shared::wire::{StateFrame, MAX_BODIES};
+use iceoryx2::prelude::*;
+use std::io::{Read, Write};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// A child killed when dropped.
+struct Peer(Child);
+impl Drop for Peer {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn peer(args: &[&str]) -> std::io::Result<Peer> {
+    Command::new(std::env::current_exe()?)
+        .arg("bench-peer")
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .map(Peer)
+}
+
+type BoxError = Box<dyn std::error::Error>;
+
+fn svc(name: &str) -> Result<ServiceName, BoxError> {
+    Ok(name.try_into().map_err(|e| format!("{e:?}"))?)
+}
+
+/// The ping side's services: ping (state frames) out, pong (inputs) in.
+struct PingPong {
+    node: Node<ipc::Service>,
+    out: iceoryx2::port::publisher::Publisher<ipc::Service, StateFrame, ()>,
+    inp: iceoryx2::port::subscriber::Subscriber<ipc::Service, InputFrame, ()>,
+    notify: iceoryx2::port::notifier::Notifier<ipc::Service>,
+    listen: iceoryx2::port::listener::Listener<ipc::Service>,
+}
+
+fn e<E: std::fmt::Debug>(e: E) -> BoxError {
+    format!("{e:?}").into()
+}
+
+impl PingPong {
+    fn open(base: &str) -> Result<PingPong, BoxError> {
+        let node = NodeBuilder::new().create::<ipc::Service>().map_err(e)?;
+        let (tx, rx) = ("ping", "pong");
+        let st = node
+            .service_builder(&svc(&format!("{base}/ping"))?)
+            .publish_subscribe::<StateFrame>()
+            .open_or_create()
+            .map_err(e)?;
+        let inp = node
+            .service_builder(&svc(&format!("{base}/pong"))?)
+            .publish_subscribe::<InputFrame>()
+            .open_or_create()
+            .map_err(e)?;
+        let ev_tx = node
+            .service_builder(&svc(&format!("{base}/{tx}-ev"))?)
+            .event()
+            .open_or_create()
+            .map_err(e)?;
+        let ev_rx = node
+            .service_builder(&svc(&format!("{base}/{rx}-ev"))?)
+            .event()
+            .open_or_create()
+            .map_err(e)?;
+        // The pinger sends states and reads inputs; the ponger the reverse:
+        // both payload types cross, as in lockstep.
+        Ok(PingPong {
+            out: st.publisher_builder().create().map_err(e)?,
+            inp: inp.subscriber_builder().create().map_err(e)?,
+            notify: ev_tx.notifier_builder().create().map_err(e)?,
+            listen: ev_rx.listener_builder().create().map_err(e)?,
+            node,
+        })
+    }
+}
+
+/// The echo side of the raw ping-pong.
+fn ponger(base: &str, mode: WaitMode) -> Result<(), BoxError> {
+    let node = NodeBuilder::new().create::<ipc::Service>().map_err(e)?;
+    let open_ps_state = node
+        .service_builder(&svc(&format!("{base}/ping"))?)
+        .publish_subscribe::<StateFrame>()
+        .open_or_create()
+        .map_err(e)?;
+    let open_ps_input = node
+        .service_builder(&svc(&format!("{base}/pong"))?)
+        .publish_subscribe::<InputFrame>()
+        .open_or_create()
+        .map_err(e)?;
+    let sub = open_ps_state.subscriber_builder().create().map_err(e)?;
+    let publ = open_ps_input.publisher_builder().create().map_err(e)?;
+    let listen = node
+        .service_builder(&svc(&format!("{base}/ping-ev"))?)
+        .event()
+        .open_or_create()
+        .map_err(e)?
+        .listener_builder()
+        .create()
+        .map_err(e)?;
+    let notify = node
+        .service_builder(&svc(&format!("{base}/pong-ev"))?)
+        .event()
+        .open_or_create()
+        .map_err(e)?
+        .notifier_builder()
+        .create()
+        .map_err(e)?;
+    let mut reply = InputFrame::default();
+    loop {
+        if let Some(s) = sub.receive().map_err(e)? {
+            if s.payload().step == u64::MAX {
+                return Ok(());
+            }
+            reply.step = s.payload().step;
+            publ.send_copy(reply).map_err(e)?;
+            notify.notify().map_err(e)?;
+            continue;
+        }
+        if mode == WaitMode::Block {
+            let _ = listen.timed_wait(|_| {}, Duration::from_millis(100));
+        } else {
+            std::hint::spin_loop();
+        }
+    }
+}
+
+/// Median round trip (us) of `n` raw ping-pongs.
+fn raw_pingpong(mode: WaitMode, n: usize) -> Result<f64, BoxError> {
+    let base = format!("cosim-bench-{}-{}", std::process::id(), mode.as_str());
+    let p = PingPong::open(&base)?;
+    let _peer = peer(&["pong", "--name", &base, "--wait", mode.as_str()])?;
+    let mut frame = StateFrame::default();
+    let mut times = Vec::with_capacity(n);
+    // Until the ponger is subscribed, pings are lost: resend until a pong.
+    let start = Instant::now();
+    'warm: loop {
+        frame.step = 0;
+        p.out.send_copy(frame).map_err(e)?;
+        p.notify.notify().map_err(e)?;
+        let t = Instant::now();
+        while t.elapsed() < Duration::from_millis(20) {
+            if p.inp.receive().map_err(e)?.is_some() {
+                break 'warm;
+            }
+        }
+        if start.elapsed() > Duration::from_secs(20) {
+            return Err("the ping-pong peer did not answer".into());
+        }
+    }
+    for k in 1..=n as u64 {
+        frame.step = k;
+        let t0 = Instant::now();
+        p.out.send_copy(frame).map_err(e)?;
+        p.notify.notify().map_err(e)?;
+        loop {
+            if let Some(s) = p.inp.receive().map_err(e)? {
+                if s.payload().step == k {
+                    break;
+                }
+                continue;
+            }
+            if mode == WaitMode::Block {
+                let _ = p.listen.timed_wait(|_| {}, Duration::from_millis(100));
+            } else {
+                std::hint::spin_loop();
+            }
+        }
+        times.push(t0.elapsed().as_secs_f64() * 1e6);
+    }
+    frame.step = u64::MAX;
+    p.out.send_copy(frame).map_err(e)?;
+    let _ = p.node.id();
+    Ok(median(&mut times))
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+/// One lockstep measurement.
+struct Lockstep {
+    steps_per_s: f64,
+    round_trip_us: f64,
+    compute_us: f64,
+    compute_mean_us: f64,
+}
+
+fn lockstep(
+    controllers: usize,
+    mode: WaitMode,
+    steps: u64,
+    monitor: bool,
+) -> Result<Lockstep, BoxError> {
+    let name = format!(
+        "bench-{}-{controllers}-{}-{}",
+        std::process::id(),
+        mode.as_str(),
+        u8::from(monitor)
+    );
+    let scene = crate::scenes::reference()?;
+    let opts = ServeOptions {
+        name: name.clone(),
+        controllers,
+        deadline: Duration::from_secs(5),
+        on_miss: super::controllers::MissPolicy::Hold,
+        wait: mode,
+        drop_after: 3,
+        steps: Some(steps),
+        realtime: None,
+        // The loop alone: the files are a cost of their own.
+        out: None,
+        quiet: true,
+    };
+    let server = std::thread::spawn(move || serve(&scene, opts).map_err(|e| e.to_string()));
+    // Peers retry until the server's services exist.
+    let mut peers = Vec::new();
+    for _ in 0..controllers {
+        peers.push(peer(&[
+            "controller",
+            "--name",
+            &name,
+            "--wait",
+            mode.as_str(),
+        ])?);
+    }
+    if monitor {
+        peers.push(peer(&["monitor", "--name", &name, "--wait", "block"])?);
+    }
+    let (c, _, wall) = server.join().map_err(|_| "the server thread panicked")??;
+    drop(peers);
+    let mut rt = c.round_trips.clone();
+    let mut cp = c.step_compute.clone();
+    let compute_mean_us = cp.iter().sum::<f64>() / cp.len().max(1) as f64;
+    Ok(Lockstep {
+        compute_mean_us,
+        steps_per_s: c.steps as f64 / wall,
+        round_trip_us: median(&mut rt),
+        compute_us: median(&mut cp),
+    })
+}
+
+/// Lockstep over TCP loopback: the server sends the state frame's bytes,
+/// the controller answers with an input frame's bytes, per step.
+fn tcp_lockstep(steps: u64) -> Result<(f64, f64), BoxError> {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0")?;
+    let port = listener.local_addr()?.port().to_string();
+    let _peer = peer(&["tcp", "--name", &port, "--wait", "block"])?;
+    let (mut sock, _) = listener.accept()?;
+    sock.set_nodelay(true)?;
+    let mut engine = Engine::new(Model::from_scene(&crate::scenes::reference()?));
+    let mut frame = Box::<StateFrame>::default();
+    let mut input = vec![0u8; std::mem::size_of::<InputFrame>()];
+    let mut times = Vec::with_capacity(steps as usize);
+    let start = Instant::now();
+    for _ in 0..steps {
+        super::frame::fill(&mut frame, &engine, None);
+        let t0 = Instant::now();
+        sock.write_all(state_bytes(&frame))?;
+        sock.read_exact(&mut input)?;
+        times.push(t0.elapsed().as_secs_f64() * 1e6);
+        engine.step();
+    }
+    let wall = start.elapsed().as_secs_f64();
+    Ok((steps as f64 / wall, median(&mut times)))
+}
+
+fn state_bytes(f: &StateFrame) -> &[u8] {
+    // SAFETY: StateFrame is #[repr(C)], Copy, made of u32/u64/f64 fields
+    // with explicit padding only (see the layout test in wire.rs), so every
+    // byte is initialised; the slice borrows `f` for its lifetime.
+    unsafe {
+        std::slice::from_raw_parts(
+            (f as *const StateFrame).cast::<u8>(),
+            std::mem::size_of::<StateFrame>(),
+        )
+    }
+}
+
+/// `bench-peer`: the other process of each measurement.
+pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> {
+    match role {
+        "pong" => ponger(name, mode),
+        "controller" => {
+            let start = Instant::now();
+            let mut c = loop {
+                match Controller::join(name, mode) {
+                    Ok(c) => break c,
+                    Err(cosim_client::ClientError::NoServer { .. })
+                        if start.elapsed() < Duration::from_secs(30) =>
+                    {
+                        std::thread::sleep(Duration::from_millis(5))
+                    }
+                    Err(e) => return Err(e.into()),
+                }
+            };
+            while c.next_state(Duration::from_secs(30)).is_ok() {
+                c.send(InputFrame::default())?;
+            }
+            Ok(())
+        }
+        "monitor" => {
+            let start = Instant::now();
+            let m = loop {
+                match Monitor::open(name, 16) {
+                    Ok(m) => break m,
+                    Err(_) if start.elapsed() < Duration::from_secs(30) => {
+                        std::thread::sleep(Duration::from_millis(5))
+                    }
+                    Err(e) => return Err(e.into()),
+                }
+            };
+            let mut n = 0u64;
+            while let Ok(f) = m.next(Duration::from_secs(30)) {
+                n += f.bodies[..MAX_BODIES.min(2)].len() as u64;
+                if f.status & cosim_shared::wire::STATUS_SHUTDOWN != 0 {
+                    break;
+                }
+            }
+            let _ = n;
+            Ok(())
+        }
+        "tcp" => {
+            let mut sock = std::net::TcpStream::connect(("127.0.0.1", name.parse::<u16>()?))?;
+            sock.set_nodelay(true)?;
+            let mut state = vec![0u8; std::mem::size_of::<StateFrame>()];
+            let reply = InputFrame::default();
+            // SAFETY: as state_bytes: InputFrame is #[repr(C)] plain data.
+            let reply = unsafe {
+                std::slice::from_raw_parts(
+                    (&reply as *const InputFrame).cast::<u8>(),
+                    std::mem::size_of::<InputFrame>(),
+                )
+            };
+            while sock.read_exact(&mut state).is_ok() {
+                sock.write_all(reply)?;
+            }
+            Ok(())
+        }
+        other => Err(format!("unknown bench peer role {other:?}").into()),
+    }
+}
+
+/// Runs every measurement and prints the table (Markdown).
+pub fn run(steps: u64) -> Result<String, BoxError> {
+    let mut out = String::new();
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    out.push_str(&format!(
+        "cosim-server bench ipc: reference scene, {steps} steps per lockstep row, {cores} cores\n\n"
+    ));
+    out.push_str("| measurement | steps/s | round trip median (us) | step compute median / mean (us) |\n|---|---|---|---|\n");
+    for mode in [WaitMode::Spin, WaitMode::Block] {
+        let rt = raw_pingpong(
+            mode,
+            if mode == WaitMode::Spin {
+                20_000
+            } else {
+                5_000
+            },
+        )?;
+        out.push_str(&format!(
+            "| raw iceoryx2 ping-pong, {} | {:.0} | {rt:.2} | - |\n",
+            mode.as_str(),
+            1e6 / rt
+        ));
+    }
+    let (tcp, tcp_rt) = tcp_lockstep(steps)?;
+    out.push_str(&format!(
+        "| lockstep over TCP loopback, 1 controller | {tcp:.0} | {tcp_rt:.2} | - |\n"
+    ));
+    let mut rows = Vec::new();
+    for n in [1usize, 2, 4] {
+        for mode in [WaitMode::Spin, WaitMode::Block, WaitMode::Hybrid] {
+            // Oversubscribed spinning is slow by design: fewer steps.
+            let s = if mode == WaitMode::Spin && n + 1 > cores {
+                steps / 10
+            } else {
+                steps
+            };
+            let r = lockstep(n, mode, s.max(100), false)?;
+            out.push_str(&format!(
+                "| lockstep, {n} controller{}, {} | {:.0} | {:.2} | {:.2} / {:.2} |\n",
+                if n > 1 { "s" } else { "" },
+                mode.as_str(),
+                r.steps_per_s,
+                r.round_trip_us,
+                r.compute_us,
+                r.compute_mean_us
+            ));
+            rows.push((n, mode, r));
+        }
+    }
+    for mode in [WaitMode::Spin, WaitMode::Hybrid] {
+        let r = lockstep(1, mode, steps, true)?;
+        out.push_str(&format!(
+            "| lockstep, 1 controller, {}, + monitor process | {:.0} | {:.2} | {:.2} / {:.2} |\n",
+            mode.as_str(),
+            r.steps_per_s,
+            r.round_trip_us,
+            r.compute_us,
+            r.compute_mean_us
+        ));
+        rows.push((0, mode, r));
+    }
+    let spin1 = rows
+        .iter()
+        .find(|(n, m, _)| *n == 1 && *m == WaitMode::Spin)
+        .map(|r| r.2.steps_per_s)
+        .unwrap_or(f64::NAN);
+    out.push_str(&format!(
+        "\nspin, 1 controller, against TCP: {:.1}x the steps per second\n",
+        spin1 / tcp
+    ));
+    Ok(out)
+}
