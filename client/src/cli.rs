@@ -400,8 +400,9 @@ impl Recorder {
     }
 }
 
-/// The open-loop player: rows `step,joint,tx,ty,tz` sent at their step.
-fn play(
+/// The open-loop player: rows `step,joint,tx,ty,tz` sent at their step;
+/// returns the steps answered.
+pub fn play(
     name: &str,
     file: &Path,
     wait: WaitMode,

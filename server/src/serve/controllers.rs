@@ -47,6 +47,8 @@ pub struct Slot {
     /// `REJECT_*` bits already logged (each reason is logged once).
     pub logged: u32,
     pub missed_now: bool,
+    /// Left after answering the coming step: removed once it is taken.
+    pub leaving: bool,
 }
 
 impl Slot {
@@ -62,6 +64,7 @@ impl Slot {
             rejected: 0,
             logged: 0,
             missed_now: false,
+            leaving: false,
         }
     }
 

@@ -560,6 +560,7 @@ impl Server {
         for s in &mut self.slots {
             s.impulses.clear();
         }
+        self.slots.retain(|s| !s.leaving);
         let t0 = Instant::now();
         let report = self.engine.finish();
         self.c.step_compute.push(t0.elapsed().as_secs_f64() * 1e6);
@@ -643,9 +644,23 @@ impl Server {
             match r.command {
                 CMD_JOIN => self.join(&req, &r)?,
                 CMD_LEAVE => {
+                    // NOTE: inputs sent before the leave are in the buffer
+                    // now; an answer to the coming step still applies to
+                    // it, and the slot goes after that step.
+                    let k = self.engine.state().step;
+                    while let Some(input) = self.svc.receive_input()? {
+                        self.take_input(&input, k)?;
+                    }
                     let before = self.slots.len();
-                    self.slots.retain(|s| s.id != r.controller_id);
-                    if self.slots.len() == before {
+                    for s in &mut self.slots {
+                        if s.id == r.controller_id && s.answered == Some(k) {
+                            s.leaving = true;
+                        }
+                    }
+                    self.slots.retain(|s| s.id != r.controller_id || s.leaving);
+                    let found = self.slots.len() < before
+                        || self.slots.iter().any(|s| s.id == r.controller_id);
+                    if !found {
                         self.refuse(
                             &req,
                             RESP_UNKNOWN_CONTROLLER,
