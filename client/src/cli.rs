@@ -183,31 +183,36 @@ fn execute(cli: &Cli) -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
+/// Redraw period of `cosim monitor`.
+const MONITOR_PERIOD: Duration = Duration::from_millis(100);
+
+/// The live table. It reads the newest frame ten times a second instead of
+/// waking for every frame, so it costs the server nothing it could notice.
 fn monitor(name: &str, seconds: Option<f64>) -> Result<(), ClientError> {
-    let m = Monitor::open(name, 1)?;
+    let conn = Connection::connect(name)?;
+    let names: Vec<String> = conn
+        .scene_toml()
+        .ok()
+        .and_then(|t| cosim_shared::Scene::parse(&t, "<server scene>").ok())
+        .map(|s| s.bodies.into_iter().map(|b| b.name).collect())
+        .unwrap_or_default();
+    let m = Monitor::polling(name)?;
     let start = Instant::now();
     let mut last: Option<(Instant, u64)> = None;
-    let mut rate = 0.0;
     loop {
         if seconds.is_some_and(|s| start.elapsed().as_secs_f64() > s) {
             return Ok(());
         }
-        let f = match m.next(Duration::from_millis(500)) {
-            Ok(f) => f,
-            Err(ClientError::Timeout { .. }) => continue,
-            Err(ClientError::Interrupted) => return Ok(()),
-            Err(e) => return Err(e),
-        };
-        // Redraw at most 10 times a second; the frames in between are
-        // dropped (the subscriber holds one).
-        let now = Instant::now();
-        if let Some((t, step)) = last {
-            let dt = now.duration_since(t).as_secs_f64();
-            if dt < 0.1 && f.status & STATUS_SHUTDOWN == 0 {
-                continue;
-            }
-            rate = f.step.saturating_sub(step) as f64 / dt;
+        if m.node().wait(MONITOR_PERIOD).is_err() {
+            return Ok(()); // SIGINT
         }
+        let Some(f) = m.latest()? else {
+            continue;
+        };
+        let now = Instant::now();
+        let rate = last.map_or(0.0, |(t, step)| {
+            f.step.saturating_sub(step) as f64 / now.duration_since(t).as_secs_f64()
+        });
         last = Some((now, f.step));
         let mut out = String::new();
         out.push_str("\x1b[2J\x1b[H");
@@ -223,11 +228,12 @@ fn monitor(name: &str, seconds: Option<f64>) -> Result<(), ClientError> {
                 "running"
             }
         ));
-        out.push_str("body        x         y         z        |v|       |w|\n");
+        out.push_str("body              x         y         z       |v|       |w|\n");
         for (i, b) in f.bodies().iter().enumerate() {
             let n = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            let label = names.get(i).cloned().unwrap_or_else(|| i.to_string());
             out.push_str(&format!(
-                "{i:<4} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4}\n",
+                "{label:<12} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4}\n",
                 b.position[0],
                 b.position[1],
                 b.position[2],

@@ -334,11 +334,18 @@ impl Connection {
 /// The state subscription with its wake-up event.
 struct StateReader {
     sub: Subscriber<ipc::Service, StateFrame, ()>,
-    ready: Listener<ipc::Service>,
+    /// None for a polling reader: the server's event then has one listener
+    /// less to notify every step.
+    ready: Option<Listener<ipc::Service>>,
 }
 
 impl StateReader {
-    fn open(node: &Node<ipc::Service>, name: &str, buffer: usize) -> Result<Self, ClientError> {
+    fn open(
+        node: &Node<ipc::Service>,
+        name: &str,
+        buffer: usize,
+        wake: bool,
+    ) -> Result<Self, ClientError> {
         let sub = node
             .service_builder(&service_name(&services::state(name))?)
             .publish_subscribe::<StateFrame>()
@@ -348,14 +355,19 @@ impl StateReader {
             .buffer_size(buffer)
             .create()
             .map_err(|e| ipc("cannot subscribe to the state")(&e))?;
-        let ready = node
-            .service_builder(&service_name(&services::state_ready(name))?)
-            .event()
-            .open()
-            .map_err(|e| missing(name, &services::state_ready(name), e))?
-            .listener_builder()
-            .create()
-            .map_err(|e| ipc("cannot listen for state frames")(&e))?;
+        let ready = if wake {
+            Some(
+                node.service_builder(&service_name(&services::state_ready(name))?)
+                    .event()
+                    .open()
+                    .map_err(|e| missing(name, &services::state_ready(name), e))?
+                    .listener_builder()
+                    .create()
+                    .map_err(|e| ipc("cannot listen for state frames")(&e))?,
+            )
+        } else {
+            None
+        };
         Ok(StateReader { sub, ready })
     }
 
@@ -423,13 +435,19 @@ impl StateReader {
             // that arrived after the poll above leaves the event pending
             // and this wait returns at once.
             let left = timeout - elapsed;
-            match self
-                .ready
-                .timed_wait(|_| {}, left.min(Duration::from_millis(100)))
-            {
-                // A signal ends the wait; termination is checked below.
-                Ok(_) | Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => {}
-                Err(e) => return Err(ipc("cannot wait for the state event")(&e)),
+            match &self.ready {
+                Some(ready) => match ready.timed_wait(|_| {}, left.min(Duration::from_millis(100)))
+                {
+                    // A signal ends the wait; termination is checked below.
+                    Ok(_) | Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => {}
+                    Err(e) => return Err(ipc("cannot wait for the state event")(&e)),
+                },
+                // A polling reader sleeps a little between polls.
+                None => {
+                    if node.wait(left.min(Duration::from_millis(1))).is_err() {
+                        return Err(ClientError::Interrupted);
+                    }
+                }
             }
             if node.wait(Duration::ZERO).is_err() {
                 return Err(ClientError::Interrupted);
@@ -459,7 +477,7 @@ impl Controller {
         let conn = Connection::connect(name)?;
         // Subscribe before joining: the server republishes the state when a
         // controller joins, and the history keeps the last frame anyway.
-        let reader = StateReader::open(&conn.node, name, 2)?;
+        let reader = StateReader::open(&conn.node, name, 2, true)?;
         let input = conn
             .node
             .service_builder(&service_name(&services::input(name))?)
@@ -577,6 +595,17 @@ impl Monitor {
     /// Subscribes to server `name` with room for `buffer` frames (1 for a
     /// live view; more for a recorder that wants every frame).
     pub fn open(name: &str, buffer: usize) -> Result<Monitor, ClientError> {
+        Monitor::create(name, buffer, true)
+    }
+
+    /// A monitor that only polls ([`Monitor::latest`]): it adds nothing to
+    /// the server's step, not even an event to deliver. `next` still works,
+    /// sleeping a millisecond between polls.
+    pub fn polling(name: &str) -> Result<Monitor, ClientError> {
+        Monitor::create(name, 1, false)
+    }
+
+    fn create(name: &str, buffer: usize, wake: bool) -> Result<Monitor, ClientError> {
         let node = NodeBuilder::new()
             .create::<ipc::Service>()
             .map_err(|e| ipc("cannot create an iceoryx2 node")(&e))?;
@@ -589,7 +618,7 @@ impl Monitor {
         if !exists {
             return Err(ClientError::NoServer { name: name.into() });
         }
-        let reader = StateReader::open(&node, name, buffer)?;
+        let reader = StateReader::open(&node, name, buffer, wake)?;
         Ok(Monitor { node, reader })
     }
 

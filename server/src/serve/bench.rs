@@ -14,7 +14,7 @@
 use super::{serve, ServeOptions};
 use crate::engine::{Engine, Model};
 use cosim_client::{Controller, InputFrame, Monitor, WaitMode};
-use cosim_shared::wire::{StateFrame, MAX_BODIES};
+use cosim_shared::wire::StateFrame;
 use iceoryx2::prelude::*;
 use std::io::{Read, Write};
 use std::process::{Child, Command, Stdio};
@@ -204,19 +204,22 @@ struct Lockstep {
     round_trip_us: f64,
     compute_us: f64,
     compute_mean_us: f64,
+    /// Wall time per step minus the mean compute (prepare + finish): what
+    /// lockstep adds to a step.
+    overhead_us: f64,
 }
 
 fn lockstep(
     controllers: usize,
     mode: WaitMode,
     steps: u64,
-    monitor: bool,
+    sidecar: Option<&str>,
 ) -> Result<Lockstep, BoxError> {
     let name = format!(
         "bench-{}-{controllers}-{}-{}",
         std::process::id(),
         mode.as_str(),
-        u8::from(monitor)
+        sidecar.unwrap_or("none")
     );
     let scene = crate::scenes::reference()?;
     let opts = ServeOptions {
@@ -244,15 +247,17 @@ fn lockstep(
             mode.as_str(),
         ])?);
     }
-    if monitor {
-        peers.push(peer(&["monitor", "--name", &name, "--wait", "block"])?);
+    if let Some(role) = sidecar {
+        peers.push(peer(&[role, "--name", &name, "--wait", "block"])?);
     }
     let (c, _, wall) = server.join().map_err(|_| "the server thread panicked")??;
     drop(peers);
     let mut rt = c.round_trips.clone();
     let mut cp = c.step_compute.clone();
     let compute_mean_us = cp.iter().sum::<f64>() / cp.len().max(1) as f64;
+    let prepare_mean = c.prepare.iter().sum::<f64>() / c.prepare.len().max(1) as f64;
     Ok(Lockstep {
+        overhead_us: wall / c.steps.max(1) as f64 * 1e6 - compute_mean_us - prepare_mean,
         compute_mean_us,
         steps_per_s: c.steps as f64 / wall,
         round_trip_us: median(&mut rt),
@@ -262,7 +267,7 @@ fn lockstep(
 
 /// Lockstep over TCP loopback: the server sends the state frame's bytes,
 /// the controller answers with an input frame's bytes, per step.
-fn tcp_lockstep(steps: u64) -> Result<(f64, f64), BoxError> {
+fn tcp_lockstep(steps: u64) -> Result<(f64, f64, f64), BoxError> {
     let listener = std::net::TcpListener::bind("127.0.0.1:0")?;
     let port = listener.local_addr()?.port().to_string();
     let _peer = peer(&["tcp", "--name", &port, "--wait", "block"])?;
@@ -272,6 +277,7 @@ fn tcp_lockstep(steps: u64) -> Result<(f64, f64), BoxError> {
     let mut frame = Box::<StateFrame>::default();
     let mut input = vec![0u8; std::mem::size_of::<InputFrame>()];
     let mut times = Vec::with_capacity(steps as usize);
+    let mut compute = 0.0;
     let start = Instant::now();
     for _ in 0..steps {
         super::frame::fill(&mut frame, &engine, None);
@@ -279,10 +285,13 @@ fn tcp_lockstep(steps: u64) -> Result<(f64, f64), BoxError> {
         sock.write_all(state_bytes(&frame))?;
         sock.read_exact(&mut input)?;
         times.push(t0.elapsed().as_secs_f64() * 1e6);
+        let t1 = Instant::now();
         engine.step();
+        compute += t1.elapsed().as_secs_f64();
     }
     let wall = start.elapsed().as_secs_f64();
-    Ok((steps as f64 / wall, median(&mut times)))
+    let over = (wall - compute) / steps as f64 * 1e6;
+    Ok((steps as f64 / wall, median(&mut times), over))
 }
 
 fn state_bytes(f: &StateFrame) -> &[u8] {
@@ -319,10 +328,16 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
             }
             Ok(())
         }
-        "monitor" => {
+        // As `cosim monitor`: the newest frame, ten times a second.
+        "monitor" | "recorder" => {
             let start = Instant::now();
             let m = loop {
-                match Monitor::open(name, 16) {
+                let m = if role == "recorder" {
+                    Monitor::open(name, 64)
+                } else {
+                    Monitor::polling(name)
+                };
+                match m {
                     Ok(m) => break m,
                     Err(_) if start.elapsed() < Duration::from_secs(30) => {
                         std::thread::sleep(Duration::from_millis(5))
@@ -330,15 +345,26 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
                     Err(e) => return Err(e.into()),
                 }
             };
-            let mut n = 0u64;
-            while let Ok(f) = m.next(Duration::from_secs(30)) {
-                n += f.bodies[..MAX_BODIES.min(2)].len() as u64;
+            loop {
+                // The recorder takes every frame, woken for each.
+                let f = if role == "recorder" {
+                    match m.next(Duration::from_secs(30)) {
+                        Ok(f) => f,
+                        Err(_) => return Ok(()),
+                    }
+                } else {
+                    if m.node().wait(Duration::from_millis(100)).is_err() {
+                        return Ok(());
+                    }
+                    match m.latest()? {
+                        Some(f) => f,
+                        None => continue,
+                    }
+                };
                 if f.status & cosim_shared::wire::STATUS_SHUTDOWN != 0 {
-                    break;
+                    return Ok(());
                 }
             }
-            let _ = n;
-            Ok(())
         }
         "tcp" => {
             let mut sock = std::net::TcpStream::connect(("127.0.0.1", name.parse::<u16>()?))?;
@@ -368,7 +394,7 @@ pub fn run(steps: u64) -> Result<String, BoxError> {
     out.push_str(&format!(
         "cosim-server bench ipc: reference scene, {steps} steps per lockstep row, {cores} cores\n\n"
     ));
-    out.push_str("| measurement | steps/s | round trip median (us) | step compute median / mean (us) |\n|---|---|---|---|\n");
+    out.push_str("| measurement | steps/s | round trip median (us) | step compute median / mean (us) | overhead per step (us) |\n|---|---|---|---|---|\n");
     for mode in [WaitMode::Spin, WaitMode::Block] {
         let rt = raw_pingpong(
             mode,
@@ -379,14 +405,14 @@ pub fn run(steps: u64) -> Result<String, BoxError> {
             },
         )?;
         out.push_str(&format!(
-            "| raw iceoryx2 ping-pong, {} | {:.0} | {rt:.2} | - |\n",
+            "| raw iceoryx2 ping-pong, {} | {:.0} | {rt:.2} | - | {rt:.2} |\n",
             mode.as_str(),
             1e6 / rt
         ));
     }
-    let (tcp, tcp_rt) = tcp_lockstep(steps)?;
+    let (tcp, tcp_rt, tcp_over) = tcp_lockstep(steps)?;
     out.push_str(&format!(
-        "| lockstep over TCP loopback, 1 controller | {tcp:.0} | {tcp_rt:.2} | - |\n"
+        "| lockstep over TCP loopback, 1 controller | {tcp:.0} | {tcp_rt:.2} | - | {tcp_over:.2} |\n"
     ));
     let mut rows = Vec::new();
     for n in [1usize, 2, 4] {
@@ -397,30 +423,47 @@ pub fn run(steps: u64) -> Result<String, BoxError> {
             } else {
                 steps
             };
-            let r = lockstep(n, mode, s.max(100), false)?;
+            let r = lockstep(n, mode, s.max(100), None)?;
             out.push_str(&format!(
-                "| lockstep, {n} controller{}, {} | {:.0} | {:.2} | {:.2} / {:.2} |\n",
+                "| lockstep, {n} controller{}, {} | {:.0} | {:.2} | {:.2} / {:.2} | {:.2} |\n",
                 if n > 1 { "s" } else { "" },
                 mode.as_str(),
                 r.steps_per_s,
                 r.round_trip_us,
                 r.compute_us,
-                r.compute_mean_us
+                r.compute_mean_us,
+                r.overhead_us
             ));
             rows.push((n, mode, r));
         }
     }
+    // The monitor's cost is a few percent at most, below this machine's
+    // noise between two runs: alternate runs with and without it, five
+    // times, and compare the medians.
     for mode in [WaitMode::Spin, WaitMode::Hybrid] {
-        let r = lockstep(1, mode, steps, true)?;
+        let (mut without, mut with) = (Vec::new(), Vec::new());
+        for _ in 0..5 {
+            without.push(lockstep(1, mode, steps, None)?.steps_per_s);
+            with.push(lockstep(1, mode, steps, Some("monitor"))?.steps_per_s);
+        }
+        let (a, b) = (median(&mut without), median(&mut with));
         out.push_str(&format!(
-            "| lockstep, 1 controller, {}, + monitor process | {:.0} | {:.2} | {:.2} / {:.2} |\n",
+            "| lockstep, 1 controller, {}: without / with a monitor process (cosim monitor, newest frame at 10 Hz), medians of 5 alternating runs | {a:.0} / {b:.0} ({:+.1} %) | - | - | - |\n",
+            mode.as_str(),
+            (b / a - 1.0) * 100.0
+        ));
+    }
+    for mode in [WaitMode::Spin, WaitMode::Hybrid] {
+        let r = lockstep(1, mode, steps, Some("recorder"))?;
+        out.push_str(&format!(
+            "| lockstep, 1 controller, {}, + recorder process (every frame, woken for each) | {:.0} | {:.2} | {:.2} / {:.2} | {:.2} |\n",
             mode.as_str(),
             r.steps_per_s,
             r.round_trip_us,
             r.compute_us,
-            r.compute_mean_us
+            r.compute_mean_us,
+            r.overhead_us
         ));
-        rows.push((0, mode, r));
     }
     let spin1 = rows
         .iter()

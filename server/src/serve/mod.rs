@@ -125,6 +125,8 @@ pub struct Counters {
     pub round_trips: Vec<f64>,
     /// Engine compute per step (us).
     pub step_compute: Vec<f64>,
+    /// `Engine::prepare` per step (us), overlapped with the controllers.
+    pub prepare: Vec<f64>,
     pub max_penetration: f64,
     pub max_joint_error: f64,
 }
@@ -305,7 +307,9 @@ impl Server {
             }
             let k = self.engine.state().step;
             let published = Instant::now();
+            let t0 = Instant::now();
             self.engine.prepare();
+            self.c.prepare.push(t0.elapsed().as_secs_f64() * 1e6);
             match self.gather(k, published)? {
                 Flow::Go => {}
                 Flow::Stop(e) => return Ok(e),
