@@ -113,6 +113,24 @@ fn serve_test(test: &str, extra: &[&str]) -> (ServerProc, TempDir, String) {
     (server, dir, name)
 }
 
+/// The upper sphere's positions of an offline run of the reference scene
+/// (no server), with joint 0's torque set to `torque(k)` before step k
+/// where it gives one.
+fn offline(steps: u64, torque: impl Fn(u64) -> Option<[f64; 3]>) -> Vec<(u64, [f64; 3])> {
+    use cosim_server::engine::{Engine, Model};
+    let scene = cosim_server::scenes::reference().unwrap();
+    let mut e = Engine::new(Model::from_scene(&scene));
+    let mut rows = vec![(0, e.state().bodies[0].x.into())];
+    for k in 0..steps {
+        if let Some(t) = torque(k) {
+            e.set_joint_torque(0, t.into()).unwrap();
+        }
+        assert!(e.step().ok());
+        rows.push((e.state().step, e.state().bodies[0].x.into()));
+    }
+    rows
+}
+
 fn summary(dir: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary.json");
     serde_json::from_str(&text).expect("summary.json is JSON")
@@ -201,6 +219,10 @@ fn a_controller_answers_every_step_in_lockstep_and_the_run_replays_bit_for_bit()
     }
     let (ok, text) = replay(dir.path());
     assert!(ok && text.contains("300 steps"), "{text}");
+    // The torque sent for step k acts in step k: an offline run fed the
+    // same torques gives the same trajectory, bit for bit.
+    let expected = offline(300, |k| Some([0.0, -0.2 * (k as f64 * 0.01).sin(), 0.0]));
+    assert_eq!(rows, expected);
 }
 
 #[test]
@@ -306,6 +328,13 @@ fn bad_inputs_are_rejected_by_reason_and_the_run_goes_on() {
     let log = std::fs::read_to_string(dir.path().join("inputs.csv")).unwrap();
     assert!(log.contains(",non_finite,"));
     assert!(log.contains(",wrong_step,"));
+    // The rejected steps ran with the policy's input (hold: the last
+    // torque, which is the scene's own -0.1 here): the trajectory is the
+    // offline one with that torque throughout.
+    assert_eq!(
+        positions(dir.path(), "upper"),
+        offline(40, |_| Some([0.0, -0.1, 0.0]))
+    );
 }
 
 #[test]
@@ -481,6 +510,8 @@ fn a_monitor_that_never_reads_does_not_block_the_server() {
     // States 0..=2999 are answered; 3000 may come only with the shutdown.
     assert!(n == 3000 || n == 3001, "{n}");
     assert_eq!(summary(dir.path())["steps"], 3000);
+    // Nor the trajectory: the offline run without inputs.
+    assert_eq!(positions(dir.path(), "upper"), offline(3000, |_| None));
 }
 
 #[test]
@@ -550,8 +581,13 @@ fn a_second_server_of_the_same_name_is_refused() {
         err.contains(&format!("pid {}", first.child.as_ref().unwrap().id())),
         "{err}"
     );
-    // The first one is unharmed.
+    // The first one is unharmed, and one of another name runs beside it.
     assert!(Connection::connect(&name).unwrap().info().is_ok());
+    let (other, _dir3, other_name) = serve_test("twice-other", &[]);
+    let a = Connection::connect(&name).unwrap().info().unwrap();
+    let b = Connection::connect(&other_name).unwrap().info().unwrap();
+    assert_ne!(a.pid, b.pid);
+    drop(other);
 }
 
 #[test]
@@ -632,7 +668,7 @@ fn the_demo_holds_the_pendulum_at_its_target() {
 /// with the official iceoryx2 package (.ci/run installs it).
 #[test]
 fn the_python_controller_joins_and_answers_every_step() {
-    let (server, dir, name) = serve_test("python", &["--controllers", "1", "--steps", "500"]);
+    let (server, dir, name) = serve_test("python", &["--controllers", "1", "--steps", "1000"]);
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/python/controller.py");
     let out = Command::new("python3")
         .arg(&script)
@@ -642,17 +678,17 @@ fn the_python_controller_joins_and_answers_every_step() {
     let text =
         String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{text}");
-    // Steps 0..=499 are answered; state 500 comes with the shutdown frame
+    // Steps 0..=999 are answered; state 1000 comes with the shutdown frame
     // right behind it, so it may be read or skipped.
     assert!(
-        text.contains("server shut down; answered 500 steps")
-            || text.contains("server shut down; answered 501 steps"),
+        text.contains("server shut down; answered 1000 steps")
+            || text.contains("server shut down; answered 1001 steps"),
         "{text}"
     );
     let (status, stderr) = server.finish();
     assert!(status.success(), "{stderr}");
     let s = summary(dir.path());
-    assert_eq!(s["inputs_applied"], 500, "{s}");
+    assert_eq!(s["inputs_applied"], 1000, "{s}");
     assert_eq!(s["inputs_rejected"], serde_json::json!({}));
     assert_eq!(s["deadline_misses"], 0);
 }
