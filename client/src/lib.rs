@@ -477,7 +477,10 @@ impl Controller {
         let conn = Connection::connect(name)?;
         // Subscribe before joining: the server republishes the state when a
         // controller joins, and the history keeps the last frame anyway.
-        let reader = StateReader::open(&conn.node, name, 2, true)?;
+        // A spinning controller polls: without a listener, the server's
+        // state event has nobody to wake for it (a system call saved per
+        // step when every reader polls).
+        let reader = StateReader::open(&conn.node, name, 2, wait != WaitMode::Spin)?;
         let input = conn
             .node
             .service_builder(&service_name(&services::input(name))?)
@@ -566,7 +569,13 @@ impl Controller {
             .write_payload(*input)
             .send()
             .map_err(|e| ipc("cannot send the input")(&e))?;
-        let _ = self.conn.wake.notify();
+        // A spinning server needs no wake-up.
+        if self
+            .last
+            .is_none_or(|f| f.status & STATUS_SERVER_SPINS == 0)
+        {
+            let _ = self.conn.wake.notify();
+        }
         Ok(())
     }
 

@@ -144,6 +144,9 @@ pub const STATUS_SHUTDOWN: u32 = 16;
 pub const STATUS_WAITING: u32 = 32;
 /// More contacts than [`MAX_CONTACTS`] had impulses.
 pub const STATUS_CONTACTS_TRUNCATED: u32 = 64;
+/// The server busy-polls for inputs (`--wait spin`): a controller need not
+/// notify the wake event after its input (a system call saved per step).
+pub const STATUS_SERVER_SPINS: u32 = 128;
 
 /// The state after step `step`, published once per step (and again after
 /// reset, restore and join, with the same step).

@@ -354,6 +354,9 @@ impl Server {
         self.sequence += 1;
         let f = &mut *self.frame;
         f.status = self.status;
+        if self.opts.wait == WaitMode::Spin {
+            f.status |= STATUS_SERVER_SPINS;
+        }
         if self.paused {
             f.status |= STATUS_PAUSED;
         }
