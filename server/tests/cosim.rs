@@ -812,3 +812,27 @@ fn the_torque_player_applies_each_row_at_its_step() {
     // After it left, the scene's own torque is back on the shoulder.
     assert!(log.contains("torque,13,0,0,-0.1,0"), "{log:.600}");
 }
+
+#[test]
+fn spinning_server_and_controller_skip_the_events_and_stay_in_lockstep() {
+    let (server, dir, name) = serve_test(
+        "spin",
+        &["--controllers", "1", "--steps", "200", "--wait", "spin"],
+    );
+    let mut c = Controller::join(&name, WaitMode::Spin).expect("join");
+    let mut spins_flag = true;
+    let mut n = 0;
+    while let Ok(f) = c.next_state(Duration::from_secs(10)) {
+        spins_flag &= f.status & cosim_client::STATUS_SERVER_SPINS != 0;
+        c.send(InputFrame::default()).unwrap();
+        n += 1;
+    }
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    assert!(spins_flag, "every frame says the server spins");
+    assert!(n >= 200, "{n}");
+    let s = summary(dir.path());
+    assert_eq!(s["steps"], 200);
+    assert_eq!(s["deadline_misses"], 0);
+    assert_eq!(s["wait"], "spin");
+}
