@@ -312,11 +312,8 @@ impl Recorder {
             Ok(w)
         };
         Ok(Recorder {
-            states: open(
-                "states.csv",
-                "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz",
-            )?,
-            impulses: open("impulses.csv", "step,t,kind,name,body_a,body_b,px,py,pz")?,
+            states: open("states.csv", cosim_shared::STATES_HEADER)?,
+            impulses: open("impulses.csv", cosim_shared::IMPULSES_HEADER)?,
             steps: open(
                 "steps.csv",
                 "step,t,status,residual,lcp_size,active_contacts",

@@ -182,9 +182,21 @@ impl Connection {
     /// [`ClientError::Refused`].
     pub fn request(
         &self,
-        mut req: ControlRequest,
+        req: ControlRequest,
         timeout: Duration,
     ) -> Result<ControlResponse, ClientError> {
+        self.exchange(req, timeout, "answer from the server", Some)
+    }
+
+    /// Sends `req` and feeds its responses to `take` until it returns a
+    /// value; an error status becomes [`ClientError::Refused`].
+    fn exchange<T>(
+        &self,
+        mut req: ControlRequest,
+        timeout: Duration,
+        what: &'static str,
+        mut take: impl FnMut(ControlResponse) -> Option<T>,
+    ) -> Result<T, ClientError> {
         req.version = PROTOCOL_VERSION;
         let id = self.node.id().value();
         req.node_id_lo = id as u64;
@@ -198,7 +210,7 @@ impl Connection {
         let _ = self.wake.notify();
         let start = Instant::now();
         loop {
-            if let Some(r) = pending
+            while let Some(r) = pending
                 .receive()
                 .map_err(|e| ipc("cannot receive a control response")(&e))?
             {
@@ -209,11 +221,13 @@ impl Connection {
                         message: r.message(),
                     });
                 }
-                return Ok(r);
+                if let Some(t) = take(r) {
+                    return Ok(t);
+                }
             }
             if start.elapsed() > timeout {
                 return Err(ClientError::Timeout {
-                    what: "answer from the server",
+                    what,
                     after: timeout,
                 });
             }
@@ -254,58 +268,19 @@ impl Connection {
     }
     /// The scene as the server runs it (TOML), streamed in chunks.
     pub fn scene_toml(&self) -> Result<String, ClientError> {
-        let mut req = ControlRequest {
-            version: PROTOCOL_VERSION,
+        let req = ControlRequest {
             command: CMD_SCENE,
             ..Default::default()
         };
-        let id = self.node.id().value();
-        req.node_id_lo = id as u64;
-        req.node_id_hi = (id >> 64) as u64;
-        let pending = self
-            .control
-            .send_copy(req)
-            .map_err(|e| ipc("cannot send a control request")(&e))?;
-        let _ = self.wake.notify();
-        let start = Instant::now();
         let mut bytes = Vec::new();
-        let mut total = None;
-        loop {
-            while let Some(r) = pending
-                .receive()
-                .map_err(|e| ipc("cannot receive a control response")(&e))?
-            {
-                let r = *r.payload();
-                if r.status != RESP_OK {
-                    return Err(ClientError::Refused {
-                        status: r.status,
-                        message: r.message(),
-                    });
-                }
-                total = Some(r.value as usize);
-                let end = r
-                    .message
-                    .iter()
-                    .position(|&b| b == 0)
-                    .unwrap_or(MESSAGE_LEN);
-                bytes.extend_from_slice(&r.message[..end]);
-            }
-            if total.is_some_and(|t| bytes.len() >= t) {
-                return String::from_utf8(bytes).map_err(|e| ClientError::Ipc {
-                    what: "the scene is not UTF-8".into(),
-                    detail: e.to_string(),
-                });
-            }
-            if start.elapsed() > CONTROL_TIMEOUT {
-                return Err(ClientError::Timeout {
-                    what: "scene from the server",
-                    after: CONTROL_TIMEOUT,
-                });
-            }
-            if self.node.wait(Duration::from_micros(50)).is_err() {
-                return Err(ClientError::Interrupted);
-            }
-        }
+        let bytes = self.exchange(req, CONTROL_TIMEOUT, "scene from the server", |r| {
+            bytes.extend_from_slice(r.message_bytes());
+            (bytes.len() >= r.value as usize).then(|| std::mem::take(&mut bytes))
+        })?;
+        String::from_utf8(bytes).map_err(|e| ClientError::Ipc {
+            what: "the scene is not UTF-8".into(),
+            detail: e.to_string(),
+        })
     }
 
     /// Takes `n` steps, then pauses.
@@ -644,6 +619,24 @@ impl Monitor {
 
     pub fn node(&self) -> &Node<ipc::Service> {
         &self.node
+    }
+}
+
+/// Calls `connect` again while it finds no server, for up to `patience`:
+/// for a client started beside a server that is still creating its
+/// services. Other errors end it at once.
+pub fn when_up<T>(
+    patience: Duration,
+    mut connect: impl FnMut() -> Result<T, ClientError>,
+) -> Result<T, ClientError> {
+    let start = Instant::now();
+    loop {
+        match connect() {
+            Err(ClientError::NoServer { .. }) if start.elapsed() < patience => {
+                std::thread::sleep(Duration::from_millis(5))
+            }
+            other => return other,
+        }
     }
 }
 

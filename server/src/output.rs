@@ -19,8 +19,7 @@ pub fn num(x: f64) -> String {
     }
 }
 
-pub const STATES_HEADER: &str = "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz";
-pub const IMPULSES_HEADER: &str = "step,t,kind,name,body_a,body_b,px,py,pz";
+pub use cosim_shared::{IMPULSES_HEADER, STATES_HEADER};
 pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw";
 
 /// The three CSV files of a run.

@@ -5,6 +5,11 @@
 pub mod scene;
 pub mod wire;
 
+/// Header of `states.csv`, written by `run`, `serve` and `cosim record`.
+pub const STATES_HEADER: &str = "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz";
+/// Header of `impulses.csv`, written by the same three.
+pub const IMPULSES_HEADER: &str = "step,t,kind,name,body_a,body_b,px,py,pz";
+
 pub use scene::{
     BodyDesc, CameraDesc, FrictionCone, JointDesc, JointKind, PlaneDesc, Scene, SceneError,
     SimDesc, SolverChoice,

@@ -469,13 +469,17 @@ impl ControlResponse {
         }
         self.message[..end].copy_from_slice(&text.as_bytes()[..end]);
     }
-    pub fn message(&self) -> String {
+    /// The message's bytes up to the NUL padding.
+    pub fn message_bytes(&self) -> &[u8] {
         let end = self
             .message
             .iter()
             .position(|&b| b == 0)
             .unwrap_or(MESSAGE_LEN);
-        String::from_utf8_lossy(&self.message[..end]).into_owned()
+        &self.message[..end]
+    }
+    pub fn message(&self) -> String {
+        String::from_utf8_lossy(self.message_bytes()).into_owned()
     }
 }
 

@@ -325,32 +325,27 @@ pub fn pd_controller(args: &PdArgs) -> ExitCode {
         elevation_deg: args.elevation,
         ..Default::default()
     };
-    let start = std::time::Instant::now();
-    loop {
-        match cosim_client::pd::run(
+    // The server may still be creating its services.
+    let run = cosim_client::when_up(Duration::from_secs(30), || {
+        cosim_client::pd::run(
             &args.name,
             &gains,
             args.wait,
             args.steps,
             Duration::from_secs(30),
-        ) {
-            Ok(out) => {
-                println!(
-                    "pd: {} steps, final elevation {:.3} deg (target {})",
-                    out.steps, out.final_elevation_deg, args.elevation
-                );
-                return ExitCode::SUCCESS;
-            }
-            Err(cosim_client::ClientError::NoServer { .. })
-                if start.elapsed() < Duration::from_secs(30) =>
-            {
-                // The server is still creating its services.
-                std::thread::sleep(Duration::from_millis(20));
-            }
-            Err(e) => {
-                eprintln!("error: pd controller: {e}");
-                return ExitCode::from(EXIT_FAILED);
-            }
+        )
+    });
+    match run {
+        Ok(out) => {
+            println!(
+                "pd: {} steps, final elevation {:.3} deg (target {})",
+                out.steps, out.final_elevation_deg, args.elevation
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: pd controller: {e}");
+            ExitCode::from(EXIT_FAILED)
         }
     }
 }

@@ -45,86 +45,74 @@ fn svc(name: &str) -> Result<ServiceName, BoxError> {
     Ok(name.try_into().map_err(|e| format!("{e:?}"))?)
 }
 
-/// The ping side's services: ping (state frames) out, pong (inputs) in.
-struct PingPong {
-    node: Node<ipc::Service>,
-    out: iceoryx2::port::publisher::Publisher<ipc::Service, StateFrame, ()>,
-    inp: iceoryx2::port::subscriber::Subscriber<ipc::Service, InputFrame, ()>,
-    notify: iceoryx2::port::notifier::Notifier<ipc::Service>,
-    listen: iceoryx2::port::listener::Listener<ipc::Service>,
-}
-
 fn e<E: std::fmt::Debug>(e: E) -> BoxError {
     format!("{e:?}").into()
+}
+
+/// The four services of the raw ping-pong, opened (or created) alike by
+/// both sides: states go out on `ping`, inputs come back on `pong`, so both
+/// payload types cross, as in lockstep.
+struct PingPong {
+    /// Owns the services; it lives as long as its ports.
+    _node: Node<ipc::Service>,
+    ping: iceoryx2::service::port_factory::publish_subscribe::PortFactory<
+        ipc::Service,
+        StateFrame,
+        (),
+    >,
+    pong: iceoryx2::service::port_factory::publish_subscribe::PortFactory<
+        ipc::Service,
+        InputFrame,
+        (),
+    >,
+    ping_ev: iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
+    pong_ev: iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
 }
 
 impl PingPong {
     fn open(base: &str) -> Result<PingPong, BoxError> {
         let node = NodeBuilder::new().create::<ipc::Service>().map_err(e)?;
-        let (tx, rx) = ("ping", "pong");
-        let st = node
-            .service_builder(&svc(&format!("{base}/ping"))?)
-            .publish_subscribe::<StateFrame>()
-            .open_or_create()
-            .map_err(e)?;
-        let inp = node
-            .service_builder(&svc(&format!("{base}/pong"))?)
-            .publish_subscribe::<InputFrame>()
-            .open_or_create()
-            .map_err(e)?;
-        let ev_tx = node
-            .service_builder(&svc(&format!("{base}/{tx}-ev"))?)
-            .event()
-            .open_or_create()
-            .map_err(e)?;
-        let ev_rx = node
-            .service_builder(&svc(&format!("{base}/{rx}-ev"))?)
-            .event()
-            .open_or_create()
-            .map_err(e)?;
-        // The pinger sends states and reads inputs; the ponger the reverse:
-        // both payload types cross, as in lockstep.
+        let event = |s: &str| {
+            node.service_builder(&svc(&format!("{base}/{s}"))?)
+                .event()
+                .open_or_create()
+                .map_err(e)
+        };
         Ok(PingPong {
-            out: st.publisher_builder().create().map_err(e)?,
-            inp: inp.subscriber_builder().create().map_err(e)?,
-            notify: ev_tx.notifier_builder().create().map_err(e)?,
-            listen: ev_rx.listener_builder().create().map_err(e)?,
-            node,
+            ping: node
+                .service_builder(&svc(&format!("{base}/ping"))?)
+                .publish_subscribe::<StateFrame>()
+                .open_or_create()
+                .map_err(e)?,
+            pong: node
+                .service_builder(&svc(&format!("{base}/pong"))?)
+                .publish_subscribe::<InputFrame>()
+                .open_or_create()
+                .map_err(e)?,
+            ping_ev: event("ping-ev")?,
+            pong_ev: event("pong-ev")?,
+            _node: node,
         })
+    }
+}
+
+/// Waits for the next message the way `mode` says (spinning is the
+/// caller's loop).
+fn idle(mode: WaitMode, listen: &iceoryx2::port::listener::Listener<ipc::Service>) {
+    if mode == WaitMode::Block {
+        let _ = listen.timed_wait(|_| {}, Duration::from_millis(100));
+    } else {
+        std::hint::spin_loop();
     }
 }
 
 /// The echo side of the raw ping-pong.
 fn ponger(base: &str, mode: WaitMode) -> Result<(), BoxError> {
-    let node = NodeBuilder::new().create::<ipc::Service>().map_err(e)?;
-    let open_ps_state = node
-        .service_builder(&svc(&format!("{base}/ping"))?)
-        .publish_subscribe::<StateFrame>()
-        .open_or_create()
-        .map_err(e)?;
-    let open_ps_input = node
-        .service_builder(&svc(&format!("{base}/pong"))?)
-        .publish_subscribe::<InputFrame>()
-        .open_or_create()
-        .map_err(e)?;
-    let sub = open_ps_state.subscriber_builder().create().map_err(e)?;
-    let publ = open_ps_input.publisher_builder().create().map_err(e)?;
-    let listen = node
-        .service_builder(&svc(&format!("{base}/ping-ev"))?)
-        .event()
-        .open_or_create()
-        .map_err(e)?
-        .listener_builder()
-        .create()
-        .map_err(e)?;
-    let notify = node
-        .service_builder(&svc(&format!("{base}/pong-ev"))?)
-        .event()
-        .open_or_create()
-        .map_err(e)?
-        .notifier_builder()
-        .create()
-        .map_err(e)?;
+    let p = PingPong::open(base)?;
+    let sub = p.ping.subscriber_builder().create().map_err(e)?;
+    let publ = p.pong.publisher_builder().create().map_err(e)?;
+    let listen = p.ping_ev.listener_builder().create().map_err(e)?;
+    let notify = p.pong_ev.notifier_builder().create().map_err(e)?;
     let mut reply = InputFrame::default();
     loop {
         if let Some(s) = sub.receive().map_err(e)? {
@@ -136,11 +124,7 @@ fn ponger(base: &str, mode: WaitMode) -> Result<(), BoxError> {
             notify.notify().map_err(e)?;
             continue;
         }
-        if mode == WaitMode::Block {
-            let _ = listen.timed_wait(|_| {}, Duration::from_millis(100));
-        } else {
-            std::hint::spin_loop();
-        }
+        idle(mode, &listen);
     }
 }
 
@@ -148,6 +132,10 @@ fn ponger(base: &str, mode: WaitMode) -> Result<(), BoxError> {
 fn raw_pingpong(mode: WaitMode, n: usize) -> Result<f64, BoxError> {
     let base = format!("cosim-bench-{}-{}", std::process::id(), mode.as_str());
     let p = PingPong::open(&base)?;
+    let out = p.ping.publisher_builder().create().map_err(e)?;
+    let inp = p.pong.subscriber_builder().create().map_err(e)?;
+    let notify = p.ping_ev.notifier_builder().create().map_err(e)?;
+    let listen = p.pong_ev.listener_builder().create().map_err(e)?;
     let _peer = peer(&["pong", "--name", &base, "--wait", mode.as_str()])?;
     let mut frame = StateFrame::default();
     let mut times = Vec::with_capacity(n);
@@ -155,11 +143,11 @@ fn raw_pingpong(mode: WaitMode, n: usize) -> Result<f64, BoxError> {
     let start = Instant::now();
     'warm: loop {
         frame.step = 0;
-        p.out.send_copy(frame).map_err(e)?;
-        p.notify.notify().map_err(e)?;
+        out.send_copy(frame).map_err(e)?;
+        notify.notify().map_err(e)?;
         let t = Instant::now();
         while t.elapsed() < Duration::from_millis(20) {
-            if p.inp.receive().map_err(e)?.is_some() {
+            if inp.receive().map_err(e)?.is_some() {
                 break 'warm;
             }
         }
@@ -170,26 +158,21 @@ fn raw_pingpong(mode: WaitMode, n: usize) -> Result<f64, BoxError> {
     for k in 1..=n as u64 {
         frame.step = k;
         let t0 = Instant::now();
-        p.out.send_copy(frame).map_err(e)?;
-        p.notify.notify().map_err(e)?;
+        out.send_copy(frame).map_err(e)?;
+        notify.notify().map_err(e)?;
         loop {
-            if let Some(s) = p.inp.receive().map_err(e)? {
+            if let Some(s) = inp.receive().map_err(e)? {
                 if s.payload().step == k {
                     break;
                 }
                 continue;
             }
-            if mode == WaitMode::Block {
-                let _ = p.listen.timed_wait(|_| {}, Duration::from_millis(100));
-            } else {
-                std::hint::spin_loop();
-            }
+            idle(mode, &listen);
         }
         times.push(t0.elapsed().as_secs_f64() * 1e6);
     }
     frame.step = u64::MAX;
-    p.out.send_copy(frame).map_err(e)?;
-    let _ = p.node.id();
+    out.send_copy(frame).map_err(e)?;
     Ok(median(&mut times))
 }
 
@@ -252,16 +235,15 @@ fn lockstep(
     }
     let (c, _, wall) = server.join().map_err(|_| "the server thread panicked")??;
     drop(peers);
-    let mut rt = c.round_trips.clone();
-    let mut cp = c.step_compute.clone();
-    let compute_mean_us = cp.iter().sum::<f64>() / cp.len().max(1) as f64;
-    let prepare_mean = c.prepare.iter().sum::<f64>() / c.prepare.len().max(1) as f64;
+    let nan = f64::NAN;
+    let compute_mean_us = c.step_compute.mean().unwrap_or(nan);
+    let prepare_mean = c.prepare.mean().unwrap_or(nan);
     Ok(Lockstep {
         overhead_us: wall / c.steps.max(1) as f64 * 1e6 - compute_mean_us - prepare_mean,
         compute_mean_us,
         steps_per_s: c.steps as f64 / wall,
-        round_trip_us: median(&mut rt),
-        compute_us: median(&mut cp),
+        round_trip_us: c.round_trips.quantile(0.5).unwrap_or(nan),
+        compute_us: c.step_compute.quantile(0.5).unwrap_or(nan),
     })
 }
 
@@ -311,18 +293,8 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
     match role {
         "pong" => ponger(name, mode),
         "controller" => {
-            let start = Instant::now();
-            let mut c = loop {
-                match Controller::join(name, mode) {
-                    Ok(c) => break c,
-                    Err(cosim_client::ClientError::NoServer { .. })
-                        if start.elapsed() < Duration::from_secs(30) =>
-                    {
-                        std::thread::sleep(Duration::from_millis(5))
-                    }
-                    Err(e) => return Err(e.into()),
-                }
-            };
+            let patience = Duration::from_secs(30);
+            let mut c = cosim_client::when_up(patience, || Controller::join(name, mode))?;
             while c.next_state(Duration::from_secs(30)).is_ok() {
                 c.send(InputFrame::default())?;
             }
@@ -330,21 +302,13 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
         }
         // As `cosim monitor`: the newest frame, ten times a second.
         "monitor" | "recorder" => {
-            let start = Instant::now();
-            let m = loop {
-                let m = if role == "recorder" {
+            let m = cosim_client::when_up(Duration::from_secs(30), || {
+                if role == "recorder" {
                     Monitor::open(name, 64)
                 } else {
                     Monitor::polling(name)
-                };
-                match m {
-                    Ok(m) => break m,
-                    Err(_) if start.elapsed() < Duration::from_secs(30) => {
-                        std::thread::sleep(Duration::from_millis(5))
-                    }
-                    Err(e) => return Err(e.into()),
                 }
-            };
+            })?;
             loop {
                 // The recorder takes every frame, woken for each.
                 let f = if role == "recorder" {

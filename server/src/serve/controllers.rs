@@ -18,6 +18,15 @@ pub enum MissPolicy {
 }
 
 impl MissPolicy {
+    /// The input a rejected answer gets: the policy's, except that pause
+    /// and abort (which are about silence) hold.
+    pub fn for_rejected(self) -> MissPolicy {
+        match self {
+            MissPolicy::Zero => MissPolicy::Zero,
+            _ => MissPolicy::Hold,
+        }
+    }
+
     pub fn as_str(self) -> &'static str {
         match self {
             MissPolicy::Hold => "hold",

@@ -19,6 +19,7 @@ pub mod frame;
 pub mod log;
 pub mod replay;
 pub mod services;
+pub mod stats;
 
 use crate::engine::{Engine, Model, State, StepReport};
 use crate::output::Writers;
@@ -122,23 +123,13 @@ pub struct Counters {
     pub deadline_misses: u64,
     /// Publish of state k to the last input of step k (us), per step with
     /// controllers.
-    pub round_trips: Vec<f64>,
+    pub round_trips: stats::Histogram,
     /// Engine compute per step (us).
-    pub step_compute: Vec<f64>,
+    pub step_compute: stats::Histogram,
     /// `Engine::prepare` per step (us), overlapped with the controllers.
-    pub prepare: Vec<f64>,
+    pub prepare: stats::Histogram,
     pub max_penetration: f64,
     pub max_joint_error: f64,
-}
-
-fn percentile(v: &[f64], p: f64) -> Option<f64> {
-    if v.is_empty() {
-        return None;
-    }
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let i = ((s.len() - 1) as f64 * p).round() as usize;
-    Some(s[i])
 }
 
 /// What the control loop decided.
@@ -309,7 +300,7 @@ impl Server {
             let published = Instant::now();
             let t0 = Instant::now();
             self.engine.prepare();
-            self.c.prepare.push(t0.elapsed().as_secs_f64() * 1e6);
+            self.c.prepare.add(t0.elapsed().as_secs_f64() * 1e6);
             match self.gather(k, published)? {
                 Flow::Go => {}
                 Flow::Stop(e) => return Ok(e),
@@ -403,7 +394,7 @@ impl Server {
             if self.slots.iter().all(|s| s.answered == Some(k)) {
                 self.c
                     .round_trips
-                    .push(published.elapsed().as_secs_f64() * 1e6);
+                    .add(published.elapsed().as_secs_f64() * 1e6);
                 return Ok(Flow::Go);
             }
             // Requests in the same loop: a controller that leaves is not
@@ -518,7 +509,7 @@ impl Server {
                     if r.answered {
                         // The step goes on with the policy's input.
                         s.answered = Some(k);
-                        s.apply_miss(self.opts.on_miss.min_hold());
+                        s.apply_miss(self.opts.on_miss.for_rejected());
                     }
                     if s.logged & r.reason == 0 {
                         s.logged |= r.reason;
@@ -570,7 +561,7 @@ impl Server {
         self.slots.retain(|s| !s.leaving);
         let t0 = Instant::now();
         let report = self.engine.finish();
-        self.c.step_compute.push(t0.elapsed().as_secs_f64() * 1e6);
+        self.c.step_compute.add(t0.elapsed().as_secs_f64() * 1e6);
         if let Some(f) = self.files.as_mut() {
             f.logs.step(k, frame::state_hash(&self.engine))?;
         }
@@ -831,7 +822,7 @@ impl Server {
 
     fn write_summary(&self, ending: Ending, wall: f64) -> std::io::Result<()> {
         let c = &self.c;
-        let rt = |p| percentile(&c.round_trips, p);
+        let rt = |p| c.round_trips.quantile(p);
         let summary = serde_json::json!({
             "scene": self.engine.model().name,
             "name": self.opts.name,
@@ -848,7 +839,7 @@ impl Server {
             "inputs_rejected": c.inputs_rejected,
             "deadline_misses": c.deadline_misses,
             "round_trip_us": { "median": rt(0.5), "p99": rt(0.99) },
-            "step_compute_us": { "median": percentile(&c.step_compute, 0.5), "p99": percentile(&c.step_compute, 0.99) },
+            "step_compute_us": { "median": c.step_compute.quantile(0.5), "p99": c.step_compute.quantile(0.99) },
             "wait": self.opts.wait.as_str(),
             "on_miss": self.opts.on_miss.as_str(),
             "deadline_ms": self.opts.deadline.as_secs_f64() * 1e3,
@@ -862,17 +853,6 @@ impl Server {
                 serde_json::to_string_pretty(&summary).unwrap_or_default() + "\n",
             ),
             None => Ok(()),
-        }
-    }
-}
-
-impl MissPolicy {
-    /// The input a rejected answer gets: the policy's, except that pause
-    /// and abort (which are about silence) hold.
-    fn min_hold(self) -> MissPolicy {
-        match self {
-            MissPolicy::Zero => MissPolicy::Zero,
-            _ => MissPolicy::Hold,
         }
     }
 }
