@@ -133,6 +133,15 @@ pub struct SimDesc {
     /// Extra distance (m) within which a contact always enters the LCP.
     #[serde(default = "default_contact_margin")]
     pub contact_margin: f64,
+    /// Whether spheres collide with each other (true) or with the planes
+    /// only (false): MuJoCo's contype/conaffinity for the common case of a
+    /// jointed chain whose links must pass through each other.
+    #[serde(default = "default_true")]
+    pub sphere_contacts: bool,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 fn default_gravity() -> [f64; 3] {

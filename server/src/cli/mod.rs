@@ -74,6 +74,38 @@ pub enum BenchWhat {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Work-precision: error against wall time on cases with known
+    /// answers (S1 rolling, S2 slide to roll, S3 bounce, S4 chain, S6
+    /// corner, the reference scene), swept over h, solver, n_d and pruning.
+    /// Writes accuracy.csv and accuracy-<case>.png.
+    Accuracy(AccuracyArgs),
+    /// Stress suite: mass ratios, a pile at rest, 100 m/s impacts,
+    /// degenerate and overlapping contacts, redundant joints, a long run,
+    /// radii from 1 mm to 10 m. Prints a table (also to --out).
+    Stress {
+        /// Solvers to run every case with, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "lemke,pgs,auto")]
+        solver: Vec<cosim_shared::SolverChoice>,
+        /// Steps of the reference-scene long run.
+        #[arg(long, default_value_t = 1_000_000)]
+        long_steps: u64,
+        /// Also write the table to this file.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct AccuracyArgs {
+    /// Output folder.
+    #[arg(long, default_value = "bench/results")]
+    pub out: PathBuf,
+    /// Two steps (1e-2, 1e-3) and two settings only.
+    #[arg(long)]
+    pub quick: bool,
+    /// Only these cases (S1, S2, S3, S4, S6, REF), comma-separated.
+    #[arg(long, value_delimiter = ',')]
+    pub cases: Vec<String>,
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -192,6 +224,17 @@ pub fn main() -> ExitCode {
                 ExitCode::from(EXIT_FAILED)
             }
         },
+        Command::Bench {
+            what: BenchWhat::Accuracy(args),
+        } => bench_accuracy(&args),
+        Command::Bench {
+            what:
+                BenchWhat::Stress {
+                    solver,
+                    long_steps,
+                    out,
+                },
+        } => bench_stress(&solver, long_steps, out.as_deref()),
         Command::BenchPeer { role, name, wait } => {
             match crate::serve::bench::run_peer(&role, &name, wait) {
                 Ok(()) => ExitCode::SUCCESS,
@@ -202,4 +245,118 @@ pub fn main() -> ExitCode {
             }
         }
     }
+}
+
+fn bench_accuracy(args: &AccuracyArgs) -> ExitCode {
+    use crate::bench::{accuracy, cases::CaseId};
+    let mut sweep = if args.quick {
+        accuracy::Sweep::quick()
+    } else {
+        accuracy::Sweep::full()
+    };
+    if !args.cases.is_empty() {
+        let mut cases = Vec::new();
+        for c in &args.cases {
+            match CaseId::parse(c) {
+                Some(id) => cases.push(id),
+                None => {
+                    eprintln!(
+                        "error: --cases: unknown case {c:?}, expected S1, S2, S3, S4, S6 or REF"
+                    );
+                    return ExitCode::from(EXIT_BAD_INPUT);
+                }
+            }
+        }
+        sweep.cases = cases;
+    }
+    let machine = accuracy::machine();
+    println!("# bench accuracy on {machine}");
+    let result = accuracy::sweep(&sweep, |p| {
+        println!(
+            "{:4} {:28} h={:<7e} {:>10.3e} s/sim-s  error {:.3e}{}",
+            p.case.key(),
+            p.setting,
+            p.h,
+            p.wall_per_sim_s,
+            p.score.error,
+            p.failure
+                .as_deref()
+                .map(|f| format!("  FAILED {f}"))
+                .unwrap_or_default()
+        )
+    });
+    let (points, notes) = match result {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: bench accuracy: {e}");
+            return ExitCode::from(EXIT_FAILED);
+        }
+    };
+    for n in &notes {
+        println!("{n}");
+    }
+    if let Err(e) = std::fs::create_dir_all(&args.out) {
+        eprintln!("error: cannot create {}: {e}", args.out.display());
+        return ExitCode::from(EXIT_FAILED);
+    }
+    let csv = args.out.join("accuracy.csv");
+    if let Err(e) = std::fs::write(&csv, accuracy::csv(&points)) {
+        eprintln!("error: cannot write {}: {e}", csv.display());
+        return ExitCode::from(EXIT_FAILED);
+    }
+    let notes_file = args.out.join("accuracy-notes.txt");
+    let text = format!("machine: {machine}\n{}\n", notes.join("\n"));
+    if let Err(e) = std::fs::write(&notes_file, text) {
+        eprintln!("error: cannot write {}: {e}", notes_file.display());
+        return ExitCode::from(EXIT_FAILED);
+    }
+    match accuracy::diagrams(&points, &args.out, &machine) {
+        Ok(files) => {
+            println!("wrote {}", csv.display());
+            for f in files {
+                println!("wrote {}", f.display());
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: bench accuracy: {e}");
+            ExitCode::from(EXIT_FAILED)
+        }
+    }
+}
+
+fn bench_stress(
+    solvers: &[cosim_shared::SolverChoice],
+    long_steps: u64,
+    out: Option<&std::path::Path>,
+) -> ExitCode {
+    use crate::bench::stress;
+    let mut all = Vec::new();
+    for &s in solvers {
+        for o in stress::all(s, long_steps) {
+            println!(
+                "{:5} {:40} {:5} {}  [{}] {}",
+                s.as_str(),
+                o.case,
+                if o.pass { "pass" } else { "FAIL" },
+                o.figure,
+                o.solvers,
+                o.note
+            );
+            all.push(o);
+        }
+    }
+    let table = format!(
+        "# Stress suite\n\nMachine: {}.\n\n{}",
+        crate::bench::accuracy::machine(),
+        stress::table(&all)
+    );
+    if let Some(path) = out {
+        if let Err(e) = std::fs::write(path, &table) {
+            eprintln!("error: cannot write {}: {e}", path.display());
+            return ExitCode::from(EXIT_FAILED);
+        }
+        println!("wrote {}", path.display());
+    }
+    ExitCode::SUCCESS
 }

@@ -50,6 +50,8 @@ use nalgebra::Vector3;
 /// A Cholesky pivot below this fraction of the block's largest diagonal
 /// entry means dependent joint rows (redundant joints or a closed loop).
 const SINGULAR_PIVOT: f64 = 1e-12;
+/// Relative diagonal shift of a singular joint block (see `reduce_joints`).
+const JOINT_CFM: f64 = 1e-9;
 
 /// Why the reduction failed.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -147,6 +149,9 @@ pub struct Mlcp {
     pub z: Vec<f64>,
     /// Joint impulses (3 per joint, on body A).
     pub p_b: Vec<f64>,
+    /// The joint block was singular (redundant joints) and was factored
+    /// with a small diagonal shift.
+    pub joint_regularized: bool,
     /// Impulses of every row (joint, normal, friction): the iterative
     /// solver's unknowns.
     pub lambda: Vec<f64>,
@@ -256,13 +261,9 @@ impl Mlcp {
         self.chol.clear();
         self.y.clear();
         self.yb.clear();
+        self.joint_regularized = false;
         if nb == 0 {
             return Ok(());
-        }
-        for j in 0..nb {
-            for i in 0..nb {
-                self.chol.push(self.w[i * r + j]);
-            }
         }
         for j in 0..m {
             for i in 0..nb {
@@ -270,38 +271,61 @@ impl Mlcp {
             }
         }
         self.yb.extend_from_slice(&self.b[..nb]);
-        let max_diag = (0..nb).fold(0.0f64, |a, i| a.max(self.chol[i * nb + i]));
+        let max_diag = (0..nb).fold(0.0f64, |a, i| a.max(self.w[i * r + i]));
 
         if self.mem.as_ref().is_none_or(|(cap, _)| *cap < nb) {
             let req = cholesky_in_place_scratch::<f64>(nb, Par::Seq, Default::default());
             self.mem = Some((nb, MemBuffer::new(req)));
         }
-        let Some((_, mem)) = self.mem.as_mut() else {
-            unreachable!("scratch allocated above")
-        };
-        let stack = MemStack::new(mem);
-        let a = MatMut::from_column_major_slice_mut(&mut self.chol, nb, nb);
-        if let Err(e) = cholesky_in_place(
-            a,
-            LltRegularization::default(),
-            Par::Seq,
-            stack,
-            Default::default(),
-        ) {
-            let faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } = e;
-            return Err(MlcpError::SingularJointBlock {
-                row: index,
-                pivot: 0.0,
-            });
-        }
-        for i in 0..nb {
-            let d = self.chol[i * nb + i];
-            if d * d < SINGULAR_PIVOT * max_diag {
-                return Err(MlcpError::SingularJointBlock {
-                    row: i,
-                    pivot: d * d,
-                });
+        // NOTE: redundant joints (two joints on one pair, some closed loops)
+        // make A_bb singular: their impulses are indeterminate although the
+        // motion is not. Then A_bb + eps max(diag) I is factored instead
+        // (ODE's constraint force mixing): among the impulses that give the
+        // motion it picks one of small norm, and it leaves a joint velocity
+        // error of order eps |p_b| / m, far below the stabilisation's reach.
+        // The step report counts it in `regularized`.
+        let mut failure = None;
+        for shift in [0.0, JOINT_CFM * max_diag] {
+            self.chol.clear();
+            for j in 0..nb {
+                for i in 0..nb {
+                    self.chol
+                        .push(self.w[i * r + j] + if i == j { shift } else { 0.0 });
+                }
             }
+            let Some((_, mem)) = self.mem.as_mut() else {
+                unreachable!("scratch allocated above")
+            };
+            let stack = MemStack::new(mem);
+            let a = MatMut::from_column_major_slice_mut(&mut self.chol, nb, nb);
+            failure = match cholesky_in_place(
+                a,
+                LltRegularization::default(),
+                Par::Seq,
+                stack,
+                Default::default(),
+            ) {
+                Err(faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index }) => {
+                    Some(MlcpError::SingularJointBlock {
+                        row: index,
+                        pivot: 0.0,
+                    })
+                }
+                Ok(_) => (0..nb).find_map(|i| {
+                    let d = self.chol[i * nb + i];
+                    (d * d < SINGULAR_PIVOT * max_diag).then_some(MlcpError::SingularJointBlock {
+                        row: i,
+                        pivot: d * d,
+                    })
+                }),
+            };
+            if failure.is_none() {
+                self.joint_regularized = shift > 0.0;
+                break;
+            }
+        }
+        if let Some(e) = failure {
+            return Err(e);
         }
         let l = MatRef::from_column_major_slice(&self.chol, nb, nb);
         if m > 0 {

@@ -312,6 +312,7 @@ impl Engine {
                         model.params.solver == SolverChoice::Pgs,
                     )
                     .map_err(StepError::Mlcp)?;
+                report.regularized += usize::from(ws.mlcp.joint_regularized);
             }
             let t1 = Instant::now();
             timings.assemble += (t1 - t0).as_secs_f64();
@@ -404,7 +405,7 @@ impl Engine {
             if !ws.nu.iter().all(|x| x.is_finite()) {
                 return Err(StepError::NonFinite);
             }
-            let added = prune::check_left_out(&mut ws.contacts, &ws.nu, p.h);
+            let added = prune::check_left_out(&mut ws.contacts, &ws.nu, p);
             if added > 0 {
                 report.resolves += 1;
                 continue;

@@ -82,6 +82,8 @@ pub struct Params {
     pub contact_margin: f64,
     /// Keep every potential contact in the LCP (`--full`), as in the notes.
     pub full: bool,
+    /// Sphere-sphere contacts enabled (the scene's `sphere_contacts`).
+    pub sphere_contacts: bool,
 }
 
 /// Initial pose and twist of a body, world frame.
@@ -209,6 +211,7 @@ impl Model {
                 restitution_threshold: s.restitution_threshold,
                 contact_margin: s.contact_margin,
                 full: false,
+                sphere_contacts: s.sphere_contacts,
             },
             initial,
         }

@@ -73,7 +73,9 @@ pub struct StepReport {
     /// the step went on with the answer it had (residual reported).
     pub not_converged: bool,
     /// Solves of the step that needed Lemke's regularised retry (see
-    /// `solver::lemke`): their residual is up to 1e-6 instead of 1e-8.
+    /// `solver::lemke`): their residual is up to 1e-6 instead of 1e-8;
+    /// plus builds whose joint block was singular (redundant joints) and
+    /// was regularised (see `mlcp::reduce_joints`).
     pub regularized: usize,
     pub max_penetration: f64,
     pub max_joint_error: f64,

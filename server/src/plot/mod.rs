@@ -15,7 +15,8 @@ use std::sync::Once;
 pub const FONT: &str = "sans-serif";
 static FONT_BYTES: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 
-fn register_font() -> Result<(), PlotError> {
+/// Registers the embedded font (once); every drawing calls it first.
+pub fn ensure_font() -> Result<(), PlotError> {
     static ONCE: Once = Once::new();
     let mut ok = true;
     ONCE.call_once(|| {
@@ -77,7 +78,7 @@ pub struct PlotOptions {
 /// Draws the figures (into `DIR/plots/`) and the animation
 /// (`DIR/animation.gif`) of the run in `dir`; returns the files written.
 pub fn render(dir: &Path, opts: PlotOptions) -> Result<Vec<PathBuf>, PlotError> {
-    register_font()?;
+    ensure_font()?;
     let run = data::RunData::load(dir)?;
     let mut files = Vec::new();
     if opts.figures {

@@ -1,0 +1,456 @@
+//! `cosim-server bench accuracy`: work-precision of our engine on the cases
+//! of `cases.rs`, swept over h, solver, tolerance, `n_d` and pruning; a CSV
+//! and one log-log diagram per case (error against wall time per simulated
+//! second). The peers package adds Rapier's and MuJoCo's points to the same
+//! table with [`Point`] and redraws with [`diagrams`].
+
+use super::cases::{CaseId, Pose, Sample, Score, Scorer};
+use crate::engine::solver::PgsParams;
+use crate::engine::{Engine, ImpulseKind, Model};
+use crate::output::{contact_name, num};
+use crate::plot::{color, FONT};
+use cosim_shared::{FrictionCone, SolverChoice};
+use plotters::prelude::*;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// One solver configuration: a curve on the diagrams.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Setting {
+    pub name: String,
+    pub solver: SolverChoice,
+    /// PGS tolerance (relative natural-map residual).
+    pub tolerance: f64,
+    pub nd: usize,
+    /// No pruning: every potential contact in the LCP.
+    pub full: bool,
+    pub cone: FrictionCone,
+}
+
+impl Setting {
+    pub fn lemke(nd: usize, full: bool) -> Setting {
+        Setting {
+            name: format!("lemke nd={nd}{}", if full { " full" } else { "" }),
+            solver: SolverChoice::Lemke,
+            tolerance: 0.0,
+            nd,
+            full,
+            cone: FrictionCone::Polyhedral,
+        }
+    }
+    pub fn pgs(tolerance: f64, cone: FrictionCone) -> Setting {
+        let circ = if cone == FrictionCone::Circular {
+            " circular"
+        } else {
+            ""
+        };
+        Setting {
+            name: format!("pgs tol={tolerance:e}{circ}"),
+            solver: SolverChoice::Pgs,
+            tolerance,
+            nd: 8,
+            full: false,
+            cone,
+        }
+    }
+}
+
+/// One run: a point on a diagram.
+#[derive(Debug, Clone)]
+pub struct Point {
+    pub engine: String,
+    pub setting: String,
+    pub case: CaseId,
+    pub h: f64,
+    pub steps: u64,
+    /// Median wall time of the stepping (s) per simulated second.
+    pub wall_per_sim_s: f64,
+    pub score: Score,
+    /// `None`, or why the run stopped early (it is then not drawn).
+    pub failure: Option<String>,
+}
+
+pub const CSV_HEADER: &str =
+    "engine,setting,case,h,steps,wall_s_per_sim_s,us_per_step,error,error_name,metrics,failure";
+
+impl Point {
+    pub fn csv(&self) -> String {
+        let metrics: Vec<String> = self
+            .score
+            .metrics
+            .iter()
+            .map(|(k, v)| format!("{k}={}", num(*v)))
+            .collect();
+        let us = self.wall_per_sim_s * self.case.duration() / self.steps.max(1) as f64 * 1e6;
+        format!(
+            "{},{},{},{},{},{},{},{},\"{}\",{},{}",
+            self.engine,
+            self.setting,
+            self.case.key(),
+            num(self.h),
+            self.steps,
+            num(self.wall_per_sim_s),
+            num(us),
+            num(self.score.error),
+            self.case.error_name(),
+            metrics.join(";"),
+            self.failure.as_deref().unwrap_or("")
+        )
+    }
+}
+
+/// Our engine's state and contact forces as a [`Sample`].
+pub fn sample(engine: &Engine, out: &mut Sample) {
+    let s = engine.state();
+    out.t = s.t;
+    out.bodies.clear();
+    out.bodies.extend(s.bodies.iter().map(|b| Pose {
+        x: b.x.into(),
+        q: [b.q.w, b.q.i, b.q.j, b.q.k],
+        v: b.v.into(),
+        w: b.w.into(),
+    }));
+    out.forces.clear();
+    let h = engine.model().params.h;
+    for r in engine
+        .impulses()
+        .iter()
+        .filter(|r| r.kind == ImpulseKind::Normal)
+    {
+        out.forces
+            .push((contact_name(engine.model(), r.a, r.b), r.impulse.norm() / h));
+    }
+}
+
+fn model(case: CaseId, setting: &Setting, h: f64) -> Result<Model, String> {
+    let mut scene = case.scene(h, setting.nd).map_err(|e| e.to_string())?;
+    scene.sim.solver = setting.solver;
+    scene.sim.friction_cone = setting.cone;
+    let mut model = Model::from_scene(&scene);
+    model.params.full = setting.full;
+    Ok(model)
+}
+
+fn engine(model: Model, setting: &Setting) -> Engine {
+    let mut e = Engine::new(model);
+    if setting.solver == SolverChoice::Pgs {
+        e.set_pgs_params(PgsParams {
+            tolerance: setting.tolerance,
+            ..PgsParams::default()
+        });
+    }
+    e
+}
+
+/// Repeats the timing until this much stepping time has been spent.
+const TIMING_BUDGET_S: f64 = 0.3;
+const MAX_REPEATS: usize = 9;
+
+/// Runs `case` with `setting` at step `h` and scores it; `reference` is
+/// the converged trajectory for `CaseId::Reference`.
+pub fn run_ours(
+    case: CaseId,
+    setting: &Setting,
+    h: f64,
+    reference: Option<&Trajectory>,
+) -> Result<Point, String> {
+    let model = model(case, setting, h)?;
+    let scene = case.scene(h, setting.nd).map_err(|e| e.to_string())?;
+    let steps = scene.step_count();
+    let mut scorer = Scorer::new(case, &scene, reference.cloned());
+    let mut e = engine(model.clone(), setting);
+    let mut s = Sample::default();
+    let mut failure = None;
+    let mut elapsed = 0.0;
+    for _ in 0..steps {
+        let t0 = Instant::now();
+        let r = e.step();
+        elapsed += t0.elapsed().as_secs_f64();
+        if let Some(err) = r.error {
+            failure = Some(format!("step {}: {}", r.step + 1, err.code()));
+            break;
+        }
+        sample(&e, &mut s);
+        scorer.observe(&s);
+    }
+    // Timing: more runs without the scorer, median.
+    let mut times = vec![elapsed];
+    let mut spent = elapsed;
+    while failure.is_none() && spent < TIMING_BUDGET_S && times.len() < MAX_REPEATS {
+        let mut e = engine(model.clone(), setting);
+        let t0 = Instant::now();
+        for _ in 0..steps {
+            std::hint::black_box(e.step());
+        }
+        let t = t0.elapsed().as_secs_f64();
+        times.push(t);
+        spent += t;
+    }
+    times.sort_by(f64::total_cmp);
+    Ok(Point {
+        engine: "ours".into(),
+        setting: setting.name.clone(),
+        case,
+        h,
+        steps,
+        wall_per_sim_s: times[times.len() / 2] / case.duration(),
+        score: scorer.finish(),
+        failure,
+    })
+}
+
+/// Body positions at sample times: the converged reference run.
+pub type Trajectory = Vec<(f64, Vec<[f64; 3]>)>;
+
+/// Sample spacing of the reference trajectory (s): every h of the sweep
+/// divides it, so every run is compared at the same instants.
+pub const REFERENCE_SPACING: f64 = 0.01;
+
+/// The reference scene at step `h` (Lemke, n_d = 8), positions every
+/// `REFERENCE_SPACING`.
+pub fn reference_trajectory(h: f64, nd: usize) -> Result<Trajectory, String> {
+    let setting = Setting::lemke(nd, false);
+    let mut e = engine(model(CaseId::Reference, &setting, h)?, &setting);
+    let every = (REFERENCE_SPACING / h).round() as u64;
+    let steps = (CaseId::Reference.duration() / h).round() as u64;
+    let mut out = Vec::new();
+    for _ in 0..steps {
+        let r = e.step();
+        if let Some(err) = r.error {
+            return Err(format!(
+                "reference run at h = {h:e}: step {}: {err}",
+                r.step + 1
+            ));
+        }
+        if e.state().step.is_multiple_of(every) {
+            out.push((
+                e.state().t,
+                e.state().bodies.iter().map(|b| b.x.into()).collect(),
+            ));
+        }
+    }
+    Ok(out)
+}
+
+/// Largest position difference between two trajectories at common times.
+pub fn trajectory_distance(a: &Trajectory, b: &Trajectory) -> f64 {
+    let mut d: f64 = 0.0;
+    for ((_, xa), (_, xb)) in a.iter().zip(b) {
+        for (p, q) in xa.iter().zip(xb) {
+            let e = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+            d = d.max(e);
+        }
+    }
+    d
+}
+
+/// What to sweep.
+pub struct Sweep {
+    pub cases: Vec<CaseId>,
+    pub steps: Vec<f64>,
+    pub settings: Vec<Setting>,
+    /// Step of the converged reference run (checked against half of it).
+    pub reference_h: f64,
+}
+
+impl Sweep {
+    pub fn full() -> Sweep {
+        Sweep {
+            cases: super::cases::ALL.to_vec(),
+            steps: vec![1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4],
+            settings: vec![
+                Setting::lemke(8, false),
+                Setting::lemke(4, false),
+                Setting::lemke(16, false),
+                Setting::lemke(8, true),
+                Setting::pgs(1e-4, FrictionCone::Polyhedral),
+                Setting::pgs(1e-6, FrictionCone::Polyhedral),
+                Setting::pgs(1e-10, FrictionCone::Polyhedral),
+                Setting::pgs(1e-6, FrictionCone::Circular),
+            ],
+            reference_h: 2e-5,
+        }
+    }
+
+    /// Two steps, two settings: what the test runs.
+    pub fn quick() -> Sweep {
+        Sweep {
+            cases: super::cases::ALL.to_vec(),
+            steps: vec![1e-2, 1e-3],
+            settings: vec![
+                Setting::lemke(8, false),
+                Setting::pgs(1e-6, FrictionCone::Polyhedral),
+            ],
+            reference_h: 1e-4,
+        }
+    }
+}
+
+/// Whether a setting changes anything in a case: n_d only matters with
+/// friction, pruning only with contacts.
+fn relevant(case: CaseId, s: &Setting) -> bool {
+    let friction = matches!(
+        case,
+        CaseId::Rolling | CaseId::SlideToRoll | CaseId::Reference
+    );
+    let contacts = case != CaseId::Chain;
+    (s.nd == 8 || friction)
+        && (!s.full || contacts)
+        && (s.cone == FrictionCone::Polyhedral || friction)
+}
+
+/// Runs the sweep; `progress` gets each point as it is measured.
+pub fn sweep(
+    sw: &Sweep,
+    mut progress: impl FnMut(&Point),
+) -> Result<(Vec<Point>, Vec<String>), String> {
+    let mut points = Vec::new();
+    let mut notes = Vec::new();
+    for &case in &sw.cases {
+        let reference = if case == CaseId::Reference {
+            let a = reference_trajectory(sw.reference_h, 8)?;
+            let b = reference_trajectory(sw.reference_h / 2.0, 8)?;
+            notes.push(format!(
+                "REF: converged run at h = {:e}; it differs from the run at h/2 by {:.3e} m (largest position difference at the 0.01 s samples)",
+                sw.reference_h,
+                trajectory_distance(&a, &b)
+            ));
+            Some(b)
+        } else {
+            None
+        };
+        for setting in sw.settings.iter().filter(|s| relevant(case, s)) {
+            for &h in &sw.steps {
+                let p = run_ours(case, setting, h, reference.as_ref())?;
+                progress(&p);
+                points.push(p);
+            }
+        }
+    }
+    Ok((points, notes))
+}
+
+pub fn csv(points: &[Point]) -> String {
+    let mut s = String::from(CSV_HEADER);
+    s.push('\n');
+    for p in points {
+        let _ = writeln!(s, "{}", p.csv());
+    }
+    s
+}
+
+/// Smallest error drawn: exact answers (0) sit on the floor of the axis.
+const ERROR_FLOOR: f64 = 1e-14;
+
+/// One log-log diagram per case: `<dir>/accuracy-<case>.png`, a curve per
+/// engine and setting through its h values.
+pub fn diagrams(points: &[Point], dir: &Path, machine: &str) -> Result<Vec<PathBuf>, String> {
+    crate::plot::ensure_font().map_err(|e| e.to_string())?;
+    let mut files = Vec::new();
+    let mut cases: Vec<CaseId> = points.iter().map(|p| p.case).collect();
+    cases.dedup();
+    for case in cases {
+        let pts: Vec<&Point> = points
+            .iter()
+            .filter(|p| p.case == case && p.failure.is_none() && p.score.error.is_finite())
+            .collect();
+        if pts.is_empty() {
+            continue;
+        }
+        let path = dir.join(format!("accuracy-{}.png", case.key()));
+        draw(&pts, case, &path, machine).map_err(|e| format!("{}: {e}", path.display()))?;
+        files.push(path);
+    }
+    Ok(files)
+}
+
+fn draw(
+    pts: &[&Point],
+    case: CaseId,
+    path: &Path,
+    machine: &str,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let root = BitMapBackend::new(path, (1000, 720)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (x0, x1) = bounds(pts.iter().map(|p| p.wall_per_sim_s));
+    let (y0, y1) = bounds(pts.iter().map(|p| p.score.error.max(ERROR_FLOOR)));
+    let mut chart = ChartBuilder::on(&root)
+        .caption(format!("{} ({})", case.title(), machine), (FONT, 20))
+        .margin(15)
+        .x_label_area_size(50)
+        .y_label_area_size(80)
+        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+    chart
+        .configure_mesh()
+        .x_desc("wall time per simulated second (s), one thread")
+        .y_desc(case.error_name())
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 15))
+        .x_label_formatter(&|x| format!("{x:.0e}"))
+        .y_label_formatter(&|y| format!("{y:.0e}"))
+        .draw()?;
+    let mut curves: Vec<(String, String)> = Vec::new();
+    for p in pts {
+        let k = (p.engine.clone(), p.setting.clone());
+        if !curves.contains(&k) {
+            curves.push(k);
+        }
+    }
+    for (i, (engine, setting)) in curves.iter().enumerate() {
+        let mut line: Vec<(f64, f64)> = pts
+            .iter()
+            .filter(|p| &p.engine == engine && &p.setting == setting)
+            .map(|p| (p.h, p.wall_per_sim_s, p.score.error.max(ERROR_FLOOR)))
+            .map(|(_, x, y)| (x, y))
+            .collect();
+        line.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let c = color(i);
+        let style = if engine == "ours" {
+            c.stroke_width(2)
+        } else {
+            c.stroke_width(3)
+        };
+        chart
+            .draw_series(LineSeries::new(line.clone(), style))?
+            .label(format!("{engine}: {setting}"))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3)));
+        if engine == "ours" {
+            chart.draw_series(line.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
+        } else {
+            chart.draw_series(line.iter().map(|&p| TriangleMarker::new(p, 7, c.filled())))?;
+        }
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.4))
+        .label_font((FONT, 13))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
+
+/// Log-axis bounds with a margin of a factor 2 either side.
+fn bounds(v: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = v.fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
+        (lo.min(x), hi.max(x))
+    });
+    if !(lo.is_finite() && hi > 0.0) {
+        return (1e-3, 1.0);
+    }
+    (lo / 2.0, hi * 2.0)
+}
+
+/// "model name, cores" from /proc/cpuinfo, for the diagrams' captions.
+pub fn machine() -> String {
+    let info = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    let model = info
+        .lines()
+        .find_map(|l| l.strip_prefix("model name"))
+        .map(|l| l.trim_start_matches([' ', '\t', ':']).trim().to_string())
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{model}, {cores} cores")
+}

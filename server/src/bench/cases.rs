@@ -1,0 +1,588 @@
+//! The work-precision cases (issue #6): scenes with a known answer, and the
+//! one scorer that turns any engine's trajectory into an error.
+//!
+//! The scorer reads only what every engine can report (poses, twists, and
+//! the normal force of each named contact), so Rapier and MuJoCo in the
+//! peers package (`bench/peers`) are scored by this same code: one
+//! definition of "error" for everybody on the diagrams.
+
+use cosim_shared::{Scene, SceneError};
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+
+pub const G: f64 = 9.81;
+
+/// The cases, in the order of the issue.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CaseId {
+    /// S1: a solid sphere rolls down a 30 degree incline, mu = 0.5.
+    Rolling,
+    /// S2: a sphere sliding at 2 m/s on a floor, mu = 0.3, until it rolls.
+    SlideToRoll,
+    /// S3: a drop from 1 m with e = 0.5.
+    Bounce,
+    /// S4: five spheres on spherical joints, a chain released horizontal.
+    Chain,
+    /// S6: two spheres pushed into a corner, mu = 0: static equilibrium.
+    Corner,
+    /// The reference scene against a converged run.
+    Reference,
+}
+
+pub const ALL: [CaseId; 6] = [
+    CaseId::Rolling,
+    CaseId::SlideToRoll,
+    CaseId::Bounce,
+    CaseId::Chain,
+    CaseId::Corner,
+    CaseId::Reference,
+];
+
+// Constants of the cases and their exact answers.
+const R: f64 = 0.1;
+const INCLINE: f64 = 30.0;
+const S2_MU: f64 = 0.3;
+const S2_V0: f64 = 2.0;
+const S3_DROP: f64 = 1.0;
+const S3_E: f64 = 0.5;
+const S4_LINKS: usize = 5;
+const S4_LINK: f64 = 0.3;
+const S4_R: f64 = 0.05;
+const S6_FORCE: f64 = 10.0;
+/// Simulated seconds of the reference case: long enough for impacts
+/// between the spheres, the floor and a wall (0.09, 0.19 s), short enough
+/// that the chaotic trajectory still converges as h shrinks.
+pub const REFERENCE_SECONDS: f64 = 0.5;
+
+/// S1: `d = (1/2) (5/7) g sin(theta) t^2` at t = 1 s.
+pub fn rolling_distance() -> f64 {
+    0.5 * 5.0 / 7.0 * G * INCLINE.to_radians().sin()
+}
+/// S2: rolling speed `5/7 v0`, reached at `t* = 2 v0 / (7 mu g)`.
+pub fn slide_final_speed() -> f64 {
+    5.0 / 7.0 * S2_V0
+}
+pub fn slide_roll_time() -> f64 {
+    2.0 * S2_V0 / (7.0 * S2_MU * G)
+}
+/// S3: apex `e^2 h`.
+pub fn bounce_apex() -> f64 {
+    S3_E * S3_E * S3_DROP
+}
+/// S6: the normal force of each contact at static equilibrium. With mu = 0
+/// the forces are unique: the 10 N push (-x, -y)/sqrt 2 on B is carried by
+/// the y = 0 wall (its y part) and through A into the x = 0 wall (its x
+/// part); each floor carries its sphere's weight; nothing pushes A into
+/// the y = 0 wall, and B does not touch the x = 0 wall.
+pub fn corner_forces() -> Vec<(&'static str, f64)> {
+    let half = S6_FORCE / 2f64.sqrt();
+    vec![
+        ("A/floor", G),
+        ("A/wall_x", half),
+        ("A/wall_y", 0.0),
+        ("B/floor", G),
+        ("B/wall_y", half),
+        ("A/B", half),
+    ]
+}
+
+impl CaseId {
+    pub fn key(self) -> &'static str {
+        match self {
+            CaseId::Rolling => "S1",
+            CaseId::SlideToRoll => "S2",
+            CaseId::Bounce => "S3",
+            CaseId::Chain => "S4",
+            CaseId::Corner => "S6",
+            CaseId::Reference => "REF",
+        }
+    }
+
+    pub fn title(self) -> &'static str {
+        match self {
+            CaseId::Rolling => "S1 rolling down 30 deg, distance at 1 s",
+            CaseId::SlideToRoll => "S2 slide to roll, speed at 1 s",
+            CaseId::Bounce => "S3 bounce, first apex",
+            CaseId::Chain => "S4 chain of 5, energy drift over 10 s",
+            CaseId::Corner => "S6 corner, contact forces against equilibrium",
+            CaseId::Reference => "reference scene, positions against a converged run",
+        }
+    }
+
+    /// What `Score::error` measures, with its unit.
+    pub fn error_name(self) -> &'static str {
+        match self {
+            CaseId::Rolling => "|distance - 1.7518 m| (m)",
+            CaseId::SlideToRoll => "|speed - 10/7 m/s| (m/s)",
+            CaseId::Bounce => "|apex - 0.25 m| (m)",
+            CaseId::Chain => "|E(10 s) - E(0)| / sum m g L",
+            CaseId::Corner => "max |F - F_eq| over the last 0.5 s (N)",
+            CaseId::Reference => "max position error over 0.5 s (m)",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<CaseId> {
+        ALL.into_iter().find(|c| c.key().eq_ignore_ascii_case(s))
+    }
+
+    /// Simulated seconds.
+    pub fn duration(self) -> f64 {
+        match self {
+            CaseId::Rolling | CaseId::SlideToRoll | CaseId::Bounce | CaseId::Corner => 1.0,
+            CaseId::Chain => 10.0,
+            CaseId::Reference => REFERENCE_SECONDS,
+        }
+    }
+
+    /// The case's scene at step `h`, friction directions `nd`.
+    pub fn scene(self, h: f64, nd: usize) -> Result<Scene, SceneError> {
+        let steps = (self.duration() / h).round() as u64;
+        let mut scene = match self {
+            CaseId::Reference => crate::scenes::reference()?,
+            _ => Scene::parse(&self.toml(h, steps), self.key())?,
+        };
+        scene.sim.dt = h;
+        scene.sim.duration = None;
+        scene.sim.steps = Some(steps);
+        scene.sim.friction_directions = nd;
+        scene.sim.name = Some(self.key().to_string());
+        Ok(scene)
+    }
+
+    fn toml(self, h: f64, steps: u64) -> String {
+        let sim = format!("[sim]\ndt = {h:e}\nsteps = {steps}\n");
+        match self {
+            CaseId::Rolling => {
+                let th = INCLINE.to_radians();
+                let n = [th.sin(), 0.0, th.cos()];
+                sim + &sphere(
+                    "ball",
+                    R,
+                    1.0,
+                    [n[0] * R, 0.0, n[2] * R],
+                    [0.0; 3],
+                    0.5,
+                    0.0,
+                    [0.0; 3],
+                ) + &plane("incline", n, [0.0; 3], 0.5, 0.0)
+            }
+            CaseId::SlideToRoll => {
+                sim + &sphere(
+                    "ball",
+                    R,
+                    1.0,
+                    [0.0, 0.0, R],
+                    [S2_V0, 0.0, 0.0],
+                    S2_MU,
+                    0.0,
+                    [0.0; 3],
+                ) + &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], S2_MU, 0.0)
+            }
+            CaseId::Bounce => {
+                // The drop height is that of the sphere's lowest point.
+                sim + &sphere(
+                    "ball",
+                    R,
+                    1.0,
+                    [0.0, 0.0, S3_DROP + R],
+                    [0.0; 3],
+                    0.0,
+                    S3_E,
+                    [0.0; 3],
+                ) + &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.0, S3_E)
+            }
+            CaseId::Chain => {
+                // Link i pivots about the centre of sphere i-1 (the first
+                // about the fixed point at the origin): a chain of 0.3 m
+                // rigid links with the mass in the spheres, as a MuJoCo
+                // user would write it with ball joints.
+                // "No contact": the links pass through each other.
+                let mut s = sim + "sphere_contacts = false\n";
+                for i in 0..S4_LINKS {
+                    let x = S4_LINK * (i + 1) as f64;
+                    s += &sphere(
+                        &format!("s{i}"),
+                        S4_R,
+                        1.0,
+                        [x, 0.0, 0.0],
+                        [0.0; 3],
+                        0.0,
+                        0.0,
+                        [0.0; 3],
+                    );
+                }
+                for i in 0..S4_LINKS {
+                    let a = if i == 0 {
+                        "world".to_string()
+                    } else {
+                        format!("s{}", i - 1)
+                    };
+                    s += &format!(
+                        "[[joint]]\nname = \"j{i}\"\ntype = \"spherical\"\nbody_a = \"{a}\"\nbody_b = \"s{i}\"\nanchor = [{:e}, 0.0, 0.0]\n",
+                        S4_LINK * i as f64
+                    );
+                }
+                s
+            }
+            CaseId::Corner => {
+                let f = S6_FORCE / 2f64.sqrt();
+                sim + &sphere("A", R, 1.0, [R, R, R], [0.0; 3], 0.0, 0.0, [0.0; 3])
+                    + &sphere(
+                        "B",
+                        R,
+                        1.0,
+                        [3.0 * R, R, R],
+                        [0.0; 3],
+                        0.0,
+                        0.0,
+                        [-f, -f, 0.0],
+                    )
+                    + &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.0, 0.0)
+                    + &plane("wall_x", [1.0, 0.0, 0.0], [0.0; 3], 0.0, 0.0)
+                    + &plane("wall_y", [0.0, 1.0, 0.0], [0.0; 3], 0.0, 0.0)
+            }
+            CaseId::Reference => unreachable!("the reference scene is built in"),
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn sphere(
+    name: &str,
+    r: f64,
+    m: f64,
+    x: [f64; 3],
+    v: [f64; 3],
+    mu: f64,
+    e: f64,
+    force: [f64; 3],
+) -> String {
+    format!(
+        "[[body]]\nname = \"{name}\"\nradius = {r:e}\nmass = {m:e}\nposition = [{:e}, {:e}, {:e}]\nvelocity = [{:e}, {:e}, {:e}]\nfriction = {mu:e}\nrestitution = {e:e}\nforce = [{:e}, {:e}, {:e}]\n",
+        x[0], x[1], x[2], v[0], v[1], v[2], force[0], force[1], force[2]
+    )
+}
+
+fn plane(name: &str, n: [f64; 3], point: [f64; 3], mu: f64, e: f64) -> String {
+    format!(
+        "[[plane]]\nname = \"{name}\"\nnormal = [{:e}, {:e}, {:e}]\npoint = [{:e}, {:e}, {:e}]\nfriction = {mu:e}\nrestitution = {e:e}\n",
+        n[0], n[1], n[2], point[0], point[1], point[2]
+    )
+}
+
+/// Pose and twist of one body, world frame; `q` is `[w, x, y, z]`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Pose {
+    pub x: [f64; 3],
+    pub q: [f64; 4],
+    pub v: [f64; 3],
+    pub w: [f64; 3],
+}
+
+/// What an engine reports after a step at time `t`: the bodies in the
+/// scene's order, and the normal force (N) of each contact named `a/b` as
+/// in the scene (contacts not listed carry no force).
+#[derive(Debug, Clone, Default)]
+pub struct Sample {
+    pub t: f64,
+    pub bodies: Vec<Pose>,
+    pub forces: Vec<(String, f64)>,
+}
+
+/// A case's error (`CaseId::error_name`) and its secondary figures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Score {
+    pub error: f64,
+    pub metrics: Vec<(&'static str, f64)>,
+}
+
+fn v3(a: [f64; 3]) -> Vector3<f64> {
+    Vector3::new(a[0], a[1], a[2])
+}
+fn rot(q: [f64; 4]) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
+}
+
+/// A joint as the scorer sees it: body A (`None`: the world) and its local
+/// anchor, body B and its local anchor.
+type JointAnchors = (Option<usize>, Vector3<f64>, usize, Vector3<f64>);
+
+/// Streams a trajectory into a [`Score`].
+pub struct Scorer {
+    case: CaseId,
+    scene: Scene,
+    samples: u64,
+    // S1, S2, S3
+    slip_distance: f64,
+    max_slip: f64,
+    sink: f64,
+    roll_time: Option<f64>,
+    bounced: bool,
+    apex: Option<f64>,
+    climbing_max: f64,
+    last: Option<Sample>,
+    // S4
+    e0: Option<f64>,
+    max_drift: f64,
+    joint_error: f64,
+    anchors: Vec<JointAnchors>,
+    // S6
+    force_error: f64,
+    force_sum: Vec<f64>,
+    force_sq: Vec<f64>,
+    force_n: u64,
+    start: Vec<Vector3<f64>>,
+    drift: f64,
+    // Reference
+    reference: Option<Vec<(f64, Vec<[f64; 3]>)>>,
+    position_error: f64,
+}
+
+impl Scorer {
+    /// `scene` is the case's scene as run (its dt and bodies); `reference`
+    /// the converged trajectory (`CaseId::Reference` only), positions at
+    /// the times it lists.
+    pub fn new(
+        case: CaseId,
+        scene: &Scene,
+        reference: Option<Vec<(f64, Vec<[f64; 3]>)>>,
+    ) -> Scorer {
+        let mut anchors = Vec::new();
+        let find = |n: &str| scene.bodies.iter().position(|b| b.name == n);
+        for j in &scene.joints {
+            let anchor = v3(j.anchor);
+            let local = |i: usize| {
+                let b = &scene.bodies[i];
+                rot(b.orientation).inverse_transform_vector(&(anchor - v3(b.position)))
+            };
+            let a = find(&j.body_a);
+            let la = a.map_or(anchor, local);
+            if let Some(b) = find(&j.body_b) {
+                anchors.push((a, la, b, local(b)));
+            }
+        }
+        Scorer {
+            case,
+            scene: scene.clone(),
+            samples: 0,
+            slip_distance: 0.0,
+            max_slip: 0.0,
+            sink: 0.0,
+            roll_time: None,
+            bounced: false,
+            apex: None,
+            climbing_max: f64::NEG_INFINITY,
+            last: None,
+            e0: None,
+            max_drift: 0.0,
+            joint_error: 0.0,
+            anchors,
+            force_error: 0.0,
+            force_sum: vec![0.0; corner_forces().len()],
+            force_sq: vec![0.0; corner_forces().len()],
+            force_n: 0,
+            start: scene.bodies.iter().map(|b| v3(b.position)).collect(),
+            drift: 0.0,
+            reference,
+            position_error: 0.0,
+        }
+    }
+
+    /// Total energy: kinetic (solid spheres) plus gravity's potential.
+    fn energy(&self, s: &Sample) -> f64 {
+        let g = v3(self.scene.sim.gravity);
+        self.scene
+            .bodies
+            .iter()
+            .zip(&s.bodies)
+            .map(|(b, p)| {
+                let j = 0.4 * b.mass * b.radius * b.radius;
+                0.5 * b.mass * v3(p.v).norm_squared() + 0.5 * j * v3(p.w).norm_squared()
+                    - b.mass * g.dot(&v3(p.x))
+            })
+            .sum()
+    }
+
+    /// The contact point's slip speed of body 0 on the first plane.
+    fn slip(&self, p: &Pose) -> f64 {
+        let n = v3(self.scene.planes[0].normal).normalize();
+        (v3(p.v) + v3(p.w).cross(&(-n * self.scene.bodies[0].radius))).norm()
+    }
+
+    fn height(&self, p: &Pose) -> f64 {
+        let n = v3(self.scene.planes[0].normal).normalize();
+        n.dot(&(v3(p.x) - v3(self.scene.planes[0].point))) - self.scene.bodies[0].radius
+    }
+
+    pub fn observe(&mut self, s: &Sample) {
+        self.samples += 1;
+        let dt = self.last.as_ref().map_or(s.t, |l| s.t - l.t);
+        match self.case {
+            CaseId::Rolling | CaseId::SlideToRoll => {
+                let p = &s.bodies[0];
+                let slip = self.slip(p);
+                self.slip_distance += slip * dt;
+                self.max_slip = self.max_slip.max(slip);
+                self.sink = self.sink.max(-self.height(p));
+                // Rolling has started once the contact point's slip is
+                // below 1 mm/s (soft-contact engines creep and never reach 0).
+                if self.roll_time.is_none() && slip < 1e-3 {
+                    self.roll_time = Some(s.t);
+                }
+            }
+            CaseId::Bounce => {
+                let p = &s.bodies[0];
+                let z = self.height(p);
+                self.sink = self.sink.max(-z);
+                let up = v3(p.v).dot(&v3(self.scene.planes[0].normal).normalize());
+                if !self.bounced && up > 0.0 {
+                    self.bounced = true;
+                }
+                if self.bounced && self.apex.is_none() {
+                    self.climbing_max = self.climbing_max.max(z);
+                    if up <= 0.0 {
+                        self.apex = Some(self.climbing_max);
+                    }
+                }
+            }
+            CaseId::Chain => {
+                let e = self.energy(s);
+                let e0 = *self.e0.get_or_insert(e);
+                self.max_drift = self.max_drift.max((e - e0).abs());
+                for (a, la, b, lb) in &self.anchors {
+                    let pa = match a {
+                        Some(i) => v3(s.bodies[*i].x) + rot(s.bodies[*i].q) * la,
+                        None => *la,
+                    };
+                    let pb = v3(s.bodies[*b].x) + rot(s.bodies[*b].q) * lb;
+                    self.joint_error = self.joint_error.max((pa - pb).norm());
+                }
+            }
+            CaseId::Corner => {
+                for (i, b) in s.bodies.iter().enumerate() {
+                    self.drift = self.drift.max((v3(b.x) - self.start[i]).norm());
+                }
+                if s.t > self.scene.sim.dt * self.scene.step_count() as f64 - 0.5 + 1e-9 {
+                    self.force_n += 1;
+                    for (k, (name, exact)) in corner_forces().into_iter().enumerate() {
+                        let f = s
+                            .forces
+                            .iter()
+                            .filter(|(n, _)| n == name)
+                            .map(|(_, f)| f)
+                            .sum::<f64>();
+                        self.force_error = self.force_error.max((f - exact).abs());
+                        self.force_sum[k] += f;
+                        self.force_sq[k] += f * f;
+                    }
+                }
+            }
+            CaseId::Reference => {
+                if let Some(reference) = &self.reference {
+                    // Compare at the reference's sample times (to the step).
+                    let h = self.scene.sim.dt;
+                    if let Some((_, xs)) = reference.iter().find(|(t, _)| (t - s.t).abs() < 0.5 * h)
+                    {
+                        for (x, p) in xs.iter().zip(&s.bodies) {
+                            self.position_error =
+                                self.position_error.max((v3(*x) - v3(p.x)).norm());
+                        }
+                    }
+                }
+            }
+        }
+        self.last = Some(s.clone());
+    }
+
+    pub fn finish(self) -> Score {
+        let last = self.last.clone().unwrap_or_default();
+        match self.case {
+            CaseId::Rolling => {
+                let th = INCLINE.to_radians();
+                let down = Vector3::new(th.cos(), 0.0, -th.sin());
+                let start = v3(self.scene.bodies[0].position);
+                let d = last
+                    .bodies
+                    .first()
+                    .map_or(0.0, |p| (v3(p.x) - start).dot(&down));
+                Score {
+                    error: (d - rolling_distance()).abs(),
+                    metrics: vec![
+                        ("distance_m", d),
+                        ("slip_m", self.slip_distance),
+                        ("sink_m", self.sink),
+                    ],
+                }
+            }
+            CaseId::SlideToRoll => {
+                let speed = last.bodies.first().map_or(0.0, |p| v3(p.v).norm());
+                let tr = self.roll_time.unwrap_or(f64::INFINITY);
+                Score {
+                    error: (speed - slide_final_speed()).abs(),
+                    metrics: vec![
+                        ("speed_m_s", speed),
+                        ("roll_time_s", tr),
+                        ("roll_time_error_s", (tr - slide_roll_time()).abs()),
+                        ("sink_m", self.sink),
+                    ],
+                }
+            }
+            CaseId::Bounce => {
+                let apex = self.apex.unwrap_or(f64::NAN);
+                Score {
+                    error: (apex - bounce_apex()).abs(),
+                    metrics: vec![("apex_m", apex), ("sink_m", self.sink)],
+                }
+            }
+            CaseId::Chain => {
+                let scale: f64 = self
+                    .scene
+                    .bodies
+                    .iter()
+                    .map(|b| b.mass * G * v3(b.position).norm())
+                    .sum();
+                let e_end = self.energy(&last);
+                Score {
+                    error: (e_end - self.e0.unwrap_or(e_end)).abs() / scale,
+                    metrics: vec![
+                        ("max_energy_drift", self.max_drift / scale),
+                        ("joint_error_m", self.joint_error),
+                    ],
+                }
+            }
+            CaseId::Corner => {
+                let n = self.force_n.max(1) as f64;
+                let jitter = self
+                    .force_sum
+                    .iter()
+                    .zip(&self.force_sq)
+                    .map(|(s, q)| (q / n - (s / n).powi(2)).max(0.0).sqrt())
+                    .fold(0.0, f64::max);
+                let mean_error = corner_forces()
+                    .iter()
+                    .zip(&self.force_sum)
+                    .map(|((_, exact), s)| (s / n - exact).abs())
+                    .fold(0.0, f64::max);
+                Score {
+                    error: if self.force_n == 0 {
+                        f64::NAN
+                    } else {
+                        self.force_error
+                    },
+                    metrics: vec![
+                        ("mean_force_error_n", mean_error),
+                        ("force_std_n", jitter),
+                        ("position_drift_m", self.drift),
+                    ],
+                }
+            }
+            CaseId::Reference => Score {
+                error: if self.reference.is_some() {
+                    self.position_error
+                } else {
+                    f64::NAN
+                },
+                metrics: vec![],
+            },
+        }
+    }
+}

@@ -1,0 +1,103 @@
+//! `cosim-server bench accuracy --quick`: the files it writes, and the
+//! physics its numbers must show (issue #6).
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::process::Command;
+
+fn out_dir() -> PathBuf {
+    let d = std::env::temp_dir().join(format!("cosim-bench-accuracy-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+#[test]
+fn quick_sweep_writes_csv_and_diagrams_with_the_expected_errors() {
+    let dir = out_dir();
+    let out = Command::new(env!("CARGO_BIN_EXE_cosim-server"))
+        .args(["bench", "accuracy", "--quick", "--out"])
+        .arg(&dir)
+        .output()
+        .expect("runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("accuracy.csv")).expect("accuracy.csv");
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    let (c_setting, c_case, c_h, c_err, c_fail, c_metrics) = (
+        col("setting"),
+        col("case"),
+        col("h"),
+        col("error"),
+        col("failure"),
+        col("metrics"),
+    );
+    // (case, setting, h) -> (error, metrics)
+    let mut table = HashMap::new();
+    for l in lines {
+        // error_name is quoted and contains no comma; split is safe.
+        let f: Vec<&str> = l.split(',').collect();
+        assert_eq!(f.len(), header.len(), "{l}");
+        assert_eq!(f[c_fail], "", "a run failed: {l}");
+        let h: f64 = f[c_h].parse().expect("h");
+        let err: f64 = f[c_err].parse().expect("error");
+        table.insert(
+            (
+                f[c_case].to_string(),
+                f[c_setting].to_string(),
+                (h * 1e4).round() as i64,
+            ),
+            (err, f[c_metrics].to_string()),
+        );
+    }
+    let get = |case: &str, setting: &str, h: f64| {
+        table
+            .get(&(
+                case.to_string(),
+                setting.to_string(),
+                (h * 1e4).round() as i64,
+            ))
+            .unwrap_or_else(|| panic!("no row {case} {setting} {h}"))
+            .clone()
+    };
+    let metric = |m: &str, name: &str| -> f64 {
+        m.split(';')
+            .find_map(|kv| kv.strip_prefix(&format!("{name}=")))
+            .unwrap_or_else(|| panic!("{name} in {m}"))
+            .parse()
+            .expect("number")
+    };
+    for s in ["lemke nd=8", "pgs tol=1e-6"] {
+        // S1: semi-implicit Euler is first order: the distance error is
+        // d h / t exactly (1.7518 mm at h = 1e-3), a tenth per decade of h.
+        let (e2, _) = get("S1", s, 1e-2);
+        let (e3, m3) = get("S1", s, 1e-3);
+        assert!((e3 - 1.7518e-3).abs() < 2e-5, "S1 {s}: {e3}");
+        assert!((e2 / e3 - 10.0).abs() < 0.1, "S1 {s}: ratio {}", e2 / e3);
+        assert!(metric(&m3, "slip_m") < 1e-9, "S1 {s} slips: {m3}");
+        // S2: constant friction then rolling: the velocity update is exact.
+        assert!(get("S2", s, 1e-3).0 < 1e-9, "S2 {s}");
+        // S3: the apex error falls with h.
+        assert!(get("S3", s, 1e-3).0 < 1e-3, "S3 {s}");
+        // S6: exact static equilibrium, no jitter.
+        let (e6, m6) = get("S6", s, 1e-3);
+        assert!(e6 < 1e-6, "S6 {s}: {e6}");
+        assert!(metric(&m6, "force_std_n") < 1e-6, "S6 {s}: {m6}");
+        // The reference scene converges.
+        assert!(get("REF", s, 1e-3).0 < get("REF", s, 1e-2).0, "REF {s}");
+    }
+    // S4 (Lemke, h = 1e-3): energy within 1 %, joints within 1 mm.
+    let (e4, m4) = get("S4", "lemke nd=8", 1e-3);
+    assert!(e4 < 1e-2, "S4 energy drift {e4}");
+    assert!(metric(&m4, "joint_error_m") < 1e-3, "S4: {m4}");
+    for case in ["S1", "S2", "S3", "S4", "S6", "REF"] {
+        let png = dir.join(format!("accuracy-{case}.png"));
+        let img = image::open(&png).unwrap_or_else(|e| panic!("{}: {e}", png.display()));
+        assert_eq!((img.width(), img.height()), (1000, 720));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
