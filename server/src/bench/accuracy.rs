@@ -348,8 +348,12 @@ const ERROR_FLOOR: f64 = 1e-14;
 pub fn diagrams(points: &[Point], dir: &Path, machine: &str) -> Result<Vec<PathBuf>, String> {
     crate::plot::ensure_font().map_err(|e| e.to_string())?;
     let mut files = Vec::new();
-    let mut cases: Vec<CaseId> = points.iter().map(|p| p.case).collect();
-    cases.dedup();
+    let mut cases: Vec<CaseId> = Vec::new();
+    for p in points {
+        if !cases.contains(&p.case) {
+            cases.push(p.case);
+        }
+    }
     for case in cases {
         let pts: Vec<&Point> = points
             .iter()

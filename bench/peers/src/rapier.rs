@@ -1,0 +1,189 @@
+//! Rapier (rapier3d-f64) on the cases: the scene built as a Rapier user
+//! would, with Rapier's default integration parameters.
+
+use cosim_server::bench::accuracy::{Point, Trajectory};
+use cosim_server::bench::cases::{CaseId, Pose, Sample, Scorer};
+use cosim_shared::Scene;
+use rapier3d_f64::na::Unit;
+use rapier3d_f64::prelude::*;
+use std::time::Instant;
+
+pub const VERSION: &str = "0.36";
+
+fn vec3(a: [f64; 3]) -> Vector {
+    Vector::new(a[0], a[1], a[2])
+}
+
+struct World {
+    world: PhysicsWorld,
+    bodies: Vec<(RigidBodyHandle, ColliderHandle)>,
+    planes: Vec<ColliderHandle>,
+    names: Vec<String>,
+    plane_names: Vec<String>,
+}
+
+fn build(scene: &Scene) -> World {
+    let mut world = PhysicsWorld::default();
+    world.gravity = vec3(scene.sim.gravity);
+    world.integration_parameters.dt = scene.sim.dt;
+    // Spheres collide with planes (group 2) and, unless the scene says
+    // otherwise, with each other (group 1).
+    let sphere_groups = if scene.sim.sphere_contacts {
+        InteractionGroups::all()
+    } else {
+        InteractionGroups::new(Group::GROUP_1, Group::GROUP_2, InteractionTestMode::And)
+    };
+    let mut planes = Vec::new();
+    for p in &scene.planes {
+        let n = vec3(p.normal).normalize();
+        let body = world.insert_body(RigidBodyBuilder::fixed().translation(vec3(p.point)));
+        let c = ColliderBuilder::halfspace(Unit::new_unchecked(n))
+            .friction(p.friction)
+            .restitution(p.restitution)
+            .friction_combine_rule(CoefficientCombineRule::Min)
+            .restitution_combine_rule(CoefficientCombineRule::Max)
+            .collision_groups(InteractionGroups::new(Group::GROUP_2, Group::ALL, InteractionTestMode::And));
+        planes.push(world.insert_collider(c, Some(body)));
+    }
+    let mut bodies = Vec::new();
+    for b in &scene.bodies {
+        let q = b.orientation;
+        let rb = RigidBodyBuilder::dynamic()
+            .translation(vec3(b.position))
+            .rotation(Rotation::from_xyzw(q[1], q[2], q[3], q[0]).to_scaled_axis())
+            .linvel(vec3(b.velocity))
+            .angvel(vec3(b.angular_velocity))
+            .can_sleep(false);
+        let c = ColliderBuilder::ball(b.radius)
+            .mass(b.mass)
+            .friction(b.friction)
+            .restitution(b.restitution)
+            .friction_combine_rule(CoefficientCombineRule::Min)
+            .restitution_combine_rule(CoefficientCombineRule::Max)
+            .collision_groups(sphere_groups);
+        let (h, ch) = world.insert(rb, c);
+        world.bodies[h].add_force(vec3(b.force), true);
+        bodies.push((h, ch));
+    }
+    let ground = world.insert_body(RigidBodyBuilder::fixed());
+    let find = |n: &str| scene.bodies.iter().position(|b| b.name == n);
+    for j in &scene.joints {
+        let anchor = vec3(j.anchor);
+        let local = |i: Option<usize>| match i {
+            Some(i) => {
+                let b = &scene.bodies[i];
+                let q = b.orientation;
+                Rotation::from_xyzw(q[1], q[2], q[3], q[0]).inverse() * (anchor - vec3(b.position))
+            }
+            None => anchor,
+        };
+        let (a, b) = (find(&j.body_a), find(&j.body_b));
+        let joint = SphericalJointBuilder::new()
+            .local_anchor1(local(a))
+            .local_anchor2(local(b))
+            .contacts_enabled(true);
+        let ha = a.map_or(ground, |i| bodies[i].0);
+        let hb = b.map_or(ground, |i| bodies[i].0);
+        world.impulse_joints.insert(ha, hb, joint, true);
+        // Joint torque: +torque on body_b, -torque on body_a, held.
+        let tau = vec3(j.torque);
+        world.bodies[hb].add_torque(tau, true);
+        if a.is_some() {
+            world.bodies[ha].add_torque(-tau, true);
+        }
+    }
+    World {
+        world,
+        bodies,
+        planes,
+        names: scene.bodies.iter().map(|b| b.name.clone()).collect(),
+        plane_names: scene.planes.iter().map(|p| p.name.clone()).collect(),
+    }
+}
+
+fn sample(w: &World, t: f64, out: &mut Sample) {
+    out.t = t;
+    out.bodies.clear();
+    for (h, _) in &w.bodies {
+        let b = &w.world.bodies[*h];
+        let (x, q, v, om) = (b.translation(), b.rotation(), b.linvel(), b.angvel());
+        out.bodies.push(Pose {
+            x: [x.x, x.y, x.z],
+            q: [q.w, q.x, q.y, q.z],
+            v: [v.x, v.y, v.z],
+            w: [om.x, om.y, om.z],
+        });
+    }
+    out.forces.clear();
+    let dt = w.world.integration_parameters.dt;
+    for (i, (_, ci)) in w.bodies.iter().enumerate() {
+        for (p, cp) in w.planes.iter().enumerate() {
+            if let Some(pair) = w.world.narrow_phase.contact_pair(*ci, *cp) {
+                let f = pair.total_impulse().length() / dt;
+                if f > 0.0 {
+                    out.forces.push((format!("{}/{}", w.names[i], w.plane_names[p]), f));
+                }
+            }
+        }
+        for (j, (_, cj)) in w.bodies.iter().enumerate().skip(i + 1) {
+            if let Some(pair) = w.world.narrow_phase.contact_pair(*ci, *cj) {
+                let f = pair.total_impulse().length() / dt;
+                if f > 0.0 {
+                    out.forces.push((format!("{}/{}", w.names[i], w.names[j]), f));
+                }
+            }
+        }
+    }
+}
+
+/// Rapier's points for `case` at step `h` (one setting: the defaults).
+pub fn run(case: CaseId, h: f64, reference: Option<&Trajectory>) -> Vec<Point> {
+    let scene = match case.scene(h, 8) {
+        Ok(s) => s,
+        Err(e) => panic!("case scene: {e}"),
+    };
+    let steps = scene.step_count();
+    let mut scorer = Scorer::new(case, &scene, reference.cloned());
+    let mut w = build(&scene);
+    let mut s = Sample::default();
+    let mut elapsed = 0.0;
+    let mut failure = None;
+    for k in 0..steps {
+        let t0 = Instant::now();
+        w.world.step();
+        elapsed += t0.elapsed().as_secs_f64();
+        sample(&w, (k + 1) as f64 * h, &mut s);
+        if !s.bodies.iter().all(|b| b.x.iter().all(|x| x.is_finite())) {
+            failure = Some(format!("step {}: non-finite state", k + 1));
+            break;
+        }
+        scorer.observe(&s);
+    }
+    let mut times = vec![elapsed];
+    let mut spent = elapsed;
+    while failure.is_none() && spent < 0.3 && times.len() < 9 {
+        let mut w = build(&scene);
+        let t0 = Instant::now();
+        for _ in 0..steps {
+            w.world.step();
+        }
+        let t = t0.elapsed().as_secs_f64();
+        times.push(t);
+        spent += t;
+    }
+    times.sort_by(f64::total_cmp);
+    let score = scorer.finish();
+    if failure.is_none() && !score.error.is_finite() {
+        failure = Some("no figure (e.g. no apex within the run)".into());
+    }
+    vec![Point {
+        engine: "rapier".into(),
+        setting: "default (4 iterations)".into(),
+        case,
+        h,
+        steps,
+        wall_per_sim_s: times[times.len() / 2] / case.duration(),
+        score,
+        failure,
+    }]
+}
