@@ -30,5 +30,72 @@ fn step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, step);
+/// One criterion benchmark per stage of the step, on states of the
+/// reference run with contacts active (steps 300, 700, 1500): collision
+/// (`prepare`: detection, contact set, inverse masses), the LCP solve alone
+/// (Lemke on the step's reduced LCP), and the rest of the step (`finish`:
+/// applied impulses, pruning, assembly, solve, recovery, integration,
+/// measurements). `bench skips` shows what each skip saves from the step
+/// reports.
+fn stages(c: &mut Criterion) {
+    let scene = scenes::reference().expect("built-in scene");
+    let mut engine = Engine::new(Model::from_scene(&scene));
+    let mut states = Vec::new();
+    for _ in 0..1500 {
+        engine.step();
+        if matches!(engine.state().step, 300 | 700 | 1500) {
+            states.push(engine.state().clone());
+        }
+    }
+    let mut group = c.benchmark_group("stage");
+    group.bench_function("collision", |b| {
+        b.iter_custom(|iters| {
+            let mut total = std::time::Duration::ZERO;
+            for i in 0..iters {
+                engine.set_state(states[i as usize % states.len()].clone());
+                let t0 = std::time::Instant::now();
+                engine.prepare();
+                total += t0.elapsed();
+            }
+            total
+        })
+    });
+    group.bench_function("finish", |b| {
+        b.iter_custom(|iters| {
+            let mut total = std::time::Duration::ZERO;
+            for i in 0..iters {
+                engine.set_state(states[i as usize % states.len()].clone());
+                engine.prepare();
+                let t0 = std::time::Instant::now();
+                black_box(engine.finish());
+                total += t0.elapsed();
+            }
+            total
+        })
+    });
+    // The reduced LCPs of those steps, solved alone.
+    let lcps: Vec<(usize, Vec<f64>, Vec<f64>)> = states
+        .iter()
+        .map(|s| {
+            engine.set_state(s.clone());
+            engine.step();
+            let (n, m, q) = engine.last_lcp();
+            (n, m.to_vec(), q.to_vec())
+        })
+        .collect();
+    let mut lemke = cosim_server::engine::solver::Lemke::new();
+    let mut z = vec![0.0; lcps.iter().map(|l| l.0).max().unwrap_or(0)];
+    group.bench_function("lemke_solve", |b| {
+        let mut i = 0;
+        b.iter(|| {
+            let (n, m, q) = &lcps[i % lcps.len()];
+            i += 1;
+            let lcp = cosim_server::engine::solver::Lcp { n: *n, m, q };
+            black_box(lemke.solve(&lcp, &mut z[..*n]).is_ok())
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, step, stages);
 criterion_main!(benches);

@@ -20,7 +20,7 @@ pub fn num(x: f64) -> String {
 }
 
 pub use cosim_shared::{IMPULSES_HEADER, STATES_HEADER};
-pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw";
+pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw,projected";
 
 /// The three CSV files of a run.
 pub struct Writers {
@@ -147,6 +147,7 @@ impl Writers {
             num(t.total),
             shadow.map_or(String::new(), |s| num(s.0)),
             shadow.map_or(String::new(), |s| num(s.1)),
+            r.projected.to_string(),
         ];
         writeln!(self.steps, "{}", fields.join(","))
     }

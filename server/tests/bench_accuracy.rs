@@ -90,6 +90,17 @@ fn quick_sweep_writes_csv_and_diagrams_with_the_expected_errors() {
         // The reference scene converges.
         assert!(get("REF", s, 1e-3).0 < get("REF", s, 1e-2).0, "REF {s}");
     }
+    // The trapezoid position update makes S1 exact (constant acceleration)
+    // and leaves S2 exact, at any h.
+    for h in [1e-2, 1e-3] {
+        let (e, m) = get("S1", "lemke nd=8 trapezoid", h);
+        assert!(e < 1e-12, "S1 trapezoid at h = {h}: {e}");
+        assert!(metric(&m, "slip_m") < 1e-9, "S1 trapezoid slips: {m}");
+        assert!(
+            get("S2", "lemke nd=8 trapezoid", h).0 < 1e-9,
+            "S2 trapezoid"
+        );
+    }
     // S4 (Lemke, h = 1e-3): energy within 1 %, joints within 1 mm.
     let (e4, m4) = get("S4", "lemke nd=8", 1e-3);
     assert!(e4 < 1e-2, "S4 energy drift {e4}");

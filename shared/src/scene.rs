@@ -88,6 +88,19 @@ impl std::str::FromStr for SolverChoice {
     }
 }
 
+/// How positions advance with the step's velocities.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum PositionUpdate {
+    /// `x' = x + h v'` (semi-implicit Euler, the notes): first order.
+    #[default]
+    Euler,
+    /// `x' = x + h (v + v') / 2` for bodies whose velocity changed smoothly
+    /// this step, Euler for those in an impact and for bodies on joints:
+    /// exact under constant acceleration (rolling, sliding, flight).
+    Trapezoid,
+}
+
 /// The friction cone of the step.
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "lowercase")]
@@ -138,6 +151,9 @@ pub struct SimDesc {
     /// jointed chain whose links must pass through each other.
     #[serde(default = "default_true")]
     pub sphere_contacts: bool,
+    /// "euler" (default) or "trapezoid".
+    #[serde(default)]
+    pub position_update: PositionUpdate,
 }
 
 fn default_true() -> bool {

@@ -1,7 +1,7 @@
 //! The pass/fail part of the stress suite (`cosim-server bench stress`,
 //! issue #6), with the solvers that pass it. `bench/results/stress.md`
 //! holds the whole table, failures included (PGS at mass ratios >= 1e3,
-//! Lemke alone on the 10^6-step run, the 5 mm overlap).
+//! Lemke alone on the 10^6-step run).
 
 use cosim_server::bench::stress::{self, Outcome};
 use cosim_shared::SolverChoice::{self, Auto, Lemke, Pgs};
@@ -57,6 +57,23 @@ fn degenerate_contacts_rest_exactly() {
     }
     for kind in ["coincident", "touching"] {
         check(stress::degenerate(kind, Pgs));
+    }
+}
+
+/// A sphere built 5 mm into a corner of three planes, with friction: the
+/// step projects it out (and says so) instead of launching it at
+/// 5 sqrt(3) m/s; it ends at rest exactly where it touches all three.
+#[test]
+fn initial_overlap_is_projected_out_without_launching() {
+    for solver in [Lemke, Pgs, Auto] {
+        let o = stress::overlap(solver);
+        assert!(
+            o.note.contains("3 contacts projected"),
+            "{}: {}",
+            o.case,
+            o.note
+        );
+        check(o);
     }
 }
 

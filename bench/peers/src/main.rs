@@ -108,9 +108,9 @@ fn main() -> ExitCode {
         return ExitCode::FAILURE;
     }
     let csv = args.out.join("accuracy.csv");
-    let text = format!("machine: {machine}\n{}\n", notes.join("\n"));
+    let text = accuracy::summary(&points, &machine, &notes);
     if let Err(e) = std::fs::write(&csv, accuracy::csv(&points))
-        .and_then(|_| std::fs::write(args.out.join("accuracy-notes.txt"), text))
+        .and_then(|_| std::fs::write(args.out.join("accuracy.md"), text))
     {
         eprintln!("error: {}: {e}", csv.display());
         return ExitCode::FAILURE;

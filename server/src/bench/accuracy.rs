@@ -9,7 +9,7 @@ use crate::engine::solver::PgsParams;
 use crate::engine::{Engine, ImpulseKind, Model};
 use crate::output::{contact_name, num};
 use crate::plot::{color, FONT};
-use cosim_shared::{FrictionCone, SolverChoice};
+use cosim_shared::{FrictionCone, PositionUpdate, SolverChoice};
 use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -26,9 +26,18 @@ pub struct Setting {
     /// No pruning: every potential contact in the LCP.
     pub full: bool,
     pub cone: FrictionCone,
+    pub position_update: PositionUpdate,
 }
 
 impl Setting {
+    /// Lemke, n_d = 8, with the trapezoid position update.
+    pub fn trapezoid() -> Setting {
+        Setting {
+            name: "lemke nd=8 trapezoid".into(),
+            position_update: PositionUpdate::Trapezoid,
+            ..Setting::lemke(8, false)
+        }
+    }
     pub fn lemke(nd: usize, full: bool) -> Setting {
         Setting {
             name: format!("lemke nd={nd}{}", if full { " full" } else { "" }),
@@ -37,6 +46,7 @@ impl Setting {
             nd,
             full,
             cone: FrictionCone::Polyhedral,
+            position_update: PositionUpdate::Euler,
         }
     }
     pub fn pgs(tolerance: f64, cone: FrictionCone) -> Setting {
@@ -52,6 +62,7 @@ impl Setting {
             nd: 8,
             full: false,
             cone,
+            position_update: PositionUpdate::Euler,
         }
     }
 }
@@ -127,6 +138,7 @@ fn model(case: CaseId, setting: &Setting, h: f64) -> Result<Model, String> {
     let mut scene = case.scene(h, setting.nd).map_err(|e| e.to_string())?;
     scene.sim.solver = setting.solver;
     scene.sim.friction_cone = setting.cone;
+    scene.sim.position_update = setting.position_update;
     let mut model = Model::from_scene(&scene);
     model.params.full = setting.full;
     Ok(model)
@@ -261,6 +273,7 @@ impl Sweep {
             steps: vec![1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4],
             settings: vec![
                 Setting::lemke(8, false),
+                Setting::trapezoid(),
                 Setting::lemke(4, false),
                 Setting::lemke(16, false),
                 Setting::lemke(8, true),
@@ -273,7 +286,7 @@ impl Sweep {
         }
     }
 
-    /// Two steps, two settings: what the test runs.
+    /// Two steps, three settings: what the test runs.
     pub fn quick() -> Sweep {
         Sweep {
             cases: super::cases::ALL.to_vec(),
@@ -281,6 +294,7 @@ impl Sweep {
             settings: vec![
                 Setting::lemke(8, false),
                 Setting::pgs(1e-6, FrictionCone::Polyhedral),
+                Setting::trapezoid(),
             ],
             reference_h: 1e-4,
         }
@@ -457,4 +471,75 @@ pub fn machine() -> String {
         .unwrap_or_else(|| std::env::consts::ARCH.to_string());
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     format!("{model}, {cores} cores")
+}
+
+/// A Markdown table per case: error and wall time per simulated second of
+/// every curve at h = 1e-2 and 1e-3, and at equal run time the error of our
+/// Lemke curve (interpolated log-log between its points) beside each
+/// peer's point.
+pub fn summary(points: &[Point], machine: &str, notes: &[String]) -> String {
+    let mut s = format!("# Work-precision\n\nMachine: {machine}, one thread per engine, all points from one run.\n\n");
+    for n in notes {
+        let _ = writeln!(s, "- {n}");
+    }
+    let mut cases: Vec<CaseId> = Vec::new();
+    for p in points {
+        if !cases.contains(&p.case) {
+            cases.push(p.case);
+        }
+    }
+    for case in cases {
+        let _ = writeln!(
+            s,
+            "\n## {}\n\nError: {}. Diagram: `accuracy-{}.png`.\n",
+            case.title(),
+            case.error_name(),
+            case.key()
+        );
+        s.push_str("| engine | setting | h | error | s per simulated s | our Lemke n_d=8 at equal time |\n|---|---|---|---|---|---|\n");
+        let ours: Vec<(f64, f64)> = {
+            let mut v: Vec<(f64, f64)> = points
+                .iter()
+                .filter(|p| {
+                    p.case == case
+                        && p.engine == "ours"
+                        && p.setting == "lemke nd=8"
+                        && p.failure.is_none()
+                })
+                .map(|p| (p.wall_per_sim_s, p.score.error))
+                .collect();
+            v.sort_by(|a, b| a.0.total_cmp(&b.0));
+            v
+        };
+        for p in points.iter().filter(|p| p.case == case) {
+            if !(p.h == 1e-2 || p.h == 1e-3) {
+                continue;
+            }
+            let equal = if p.engine == "ours" {
+                String::new()
+            } else {
+                at_time(&ours, p.wall_per_sim_s)
+                    .map_or("outside our range".into(), |e| format!("{e:.3e}"))
+            };
+            let err = match &p.failure {
+                Some(f) => format!("failed: {f}"),
+                None => format!("{:.3e}", p.score.error),
+            };
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:e} | {err} | {:.3e} | {equal} |",
+                p.engine, p.setting, p.h, p.wall_per_sim_s
+            );
+        }
+    }
+    s
+}
+
+/// Log-log interpolation of a curve `(time, error)` at `t`.
+fn at_time(curve: &[(f64, f64)], t: f64) -> Option<f64> {
+    let i = curve.windows(2).position(|w| w[0].0 <= t && t <= w[1].0)?;
+    let ((t0, e0), (t1, e1)) = (curve[i], curve[i + 1]);
+    let floor = |e: f64| e.max(ERROR_FLOOR).ln();
+    let f = (t.ln() - t0.ln()) / (t1.ln() - t0.ln());
+    Some((floor(e0) + f * (floor(e1) - floor(e0))).exp())
 }

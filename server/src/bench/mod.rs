@@ -4,4 +4,5 @@
 
 pub mod accuracy;
 pub mod cases;
+pub mod skips;
 pub mod stress;

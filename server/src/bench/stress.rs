@@ -33,6 +33,7 @@ const G: f64 = 9.81;
 struct Stats {
     solvers: BTreeMap<&'static str, u64>,
     regularized: usize,
+    projected: usize,
     not_converged: usize,
     failure: Option<String>,
     max_penetration: f64,
@@ -78,6 +79,7 @@ fn run(e: &mut Engine, n: u64, mut each: impl FnMut(&Engine, &StepReport)) -> St
             break;
         }
         st.regularized += r.regularized;
+        st.projected += r.projected;
         st.not_converged += usize::from(r.not_converged);
         st.max_penetration = st.max_penetration.max(r.max_penetration);
         st.max_joint_error = st.max_joint_error.max(r.max_joint_error);
@@ -97,6 +99,12 @@ fn outcome(
     notes.extend(checks.iter().filter(|(ok, _)| !ok).map(|(_, m)| m.clone()));
     if st.regularized > 0 {
         notes.push(format!("{} regularised solves", st.regularized));
+    }
+    if st.projected > 0 {
+        notes.push(format!(
+            "{} contacts projected out of deep penetration",
+            st.projected
+        ));
     }
     if st.not_converged > 0 {
         notes.push(format!(

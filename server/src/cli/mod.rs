@@ -79,6 +79,17 @@ pub enum BenchWhat {
     /// corner, the reference scene), swept over h, solver, n_d and pruning.
     /// Writes accuracy.csv and accuracy-<case>.png.
     Accuracy(AccuracyArgs),
+    /// What each skip of the step saves: per-stage median times with the
+    /// skip on and off on the same scene, and the largest position
+    /// difference between the two runs.
+    Skips {
+        /// Steps per run.
+        #[arg(long, default_value_t = 3000)]
+        steps: u64,
+        /// Also write the table to this file.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Stress suite: mass ratios, a pile at rest, 100 m/s impacts,
     /// degenerate and overlapping contacts, redundant joints, a long run,
     /// radii from 1 mm to 10 m. Prints a table (also to --out).
@@ -208,22 +219,11 @@ pub fn main() -> ExitCode {
         Command::PdController(args) => serve::pd_controller(&args),
         Command::Bench {
             what: BenchWhat::Ipc { steps, out },
-        } => match crate::serve::bench::run(steps) {
-            Ok(table) => {
-                print!("{table}");
-                if let Some(path) = out {
-                    if let Err(e) = std::fs::write(&path, &table) {
-                        eprintln!("error: cannot write {}: {e}", path.display());
-                        return ExitCode::from(EXIT_FAILED);
-                    }
-                }
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("error: bench ipc: {e}");
-                ExitCode::from(EXIT_FAILED)
-            }
-        },
+        } => print_table(
+            "bench ipc",
+            crate::serve::bench::run(steps).map_err(|e| e.to_string()),
+            out.as_deref(),
+        ),
         Command::Bench {
             what: BenchWhat::Accuracy(args),
         } => bench_accuracy(&args),
@@ -235,6 +235,18 @@ pub fn main() -> ExitCode {
                     out,
                 },
         } => bench_stress(&solver, long_steps, out.as_deref()),
+        Command::Bench {
+            what: BenchWhat::Skips { steps, out },
+        } => {
+            let table = crate::bench::skips::measure(steps).map(|ms| {
+                format!(
+                    "# Skips\n\nMachine: {}. Median microseconds per step, skip on / off, from the step reports.\n\n{}",
+                    crate::bench::accuracy::machine(),
+                    crate::bench::skips::table(&ms, steps)
+                )
+            });
+            print_table("bench skips", table, out.as_deref())
+        }
         Command::BenchPeer { role, name, wait } => {
             match crate::serve::bench::run_peer(&role, &name, wait) {
                 Ok(()) => ExitCode::SUCCESS,
@@ -304,8 +316,8 @@ fn bench_accuracy(args: &AccuracyArgs) -> ExitCode {
         eprintln!("error: cannot write {}: {e}", csv.display());
         return ExitCode::from(EXIT_FAILED);
     }
-    let notes_file = args.out.join("accuracy-notes.txt");
-    let text = format!("machine: {machine}\n{}\n", notes.join("\n"));
+    let notes_file = args.out.join("accuracy.md");
+    let text = accuracy::summary(&points, &machine, &notes);
     if let Err(e) = std::fs::write(&notes_file, text) {
         eprintln!("error: cannot write {}: {e}", notes_file.display());
         return ExitCode::from(EXIT_FAILED);
@@ -357,6 +369,29 @@ fn bench_stress(
             return ExitCode::from(EXIT_FAILED);
         }
         println!("wrote {}", path.display());
+    }
+    ExitCode::SUCCESS
+}
+
+/// Prints a benchmark's table and writes it to `out` when given.
+fn print_table(
+    what: &str,
+    table: Result<String, String>,
+    out: Option<&std::path::Path>,
+) -> ExitCode {
+    let table = match table {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("error: {what}: {e}");
+            return ExitCode::from(EXIT_FAILED);
+        }
+    };
+    print!("{table}");
+    if let Some(path) = out {
+        if let Err(e) = std::fs::write(path, &table) {
+            eprintln!("error: cannot write {}: {e}", path.display());
+            return ExitCode::from(EXIT_FAILED);
+        }
     }
     ExitCode::SUCCESS
 }

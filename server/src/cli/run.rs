@@ -74,6 +74,7 @@ struct Tally {
     max_residual: f64,
     resolves: u64,
     regularized: u64,
+    projected: u64,
 }
 
 impl Tally {
@@ -85,6 +86,7 @@ impl Tally {
         self.max_residual = self.max_residual.max(r.residual);
         self.resolves += r.resolves as u64;
         self.regularized += r.regularized as u64;
+        self.projected += r.projected as u64;
         if let Some(e) = r.error {
             self.failures += 1;
             self.first_failure
@@ -273,6 +275,7 @@ fn simulate(
         "max_residual": tally.max_residual,
         "resolves": tally.resolves,
         "regularized_solves": tally.regularized,
+        "projected_contacts": tally.projected,
         "shadow_max_dv": shadow.then_some(shadow_max.0),
         "shadow_max_dw": shadow.then_some(shadow_max.1),
         "energy_initial": energy_initial.total,

@@ -212,7 +212,7 @@ impl Mlcp {
         self.nc = self.lcp_contacts.len();
         for i in 0..self.nc {
             let c = &contacts[self.lcp_contacts[i]];
-            if c.has_friction() {
+            if c.has_friction() || !p.skips.frictionless_rows {
                 for j in 0..nd {
                     let row = Row::contact(c, c.direction(j, nd));
                     self.b.push(row.velocity(nu_free));

@@ -84,6 +84,30 @@ pub struct Params {
     pub full: bool,
     /// Sphere-sphere contacts enabled (the scene's `sphere_contacts`).
     pub sphere_contacts: bool,
+    /// The skips, on by default; off only to measure what they save
+    /// (`bench skips`) and to test that they do not change the answer.
+    pub skips: Skips,
+    pub position_update: cosim_shared::PositionUpdate,
+}
+
+/// Work a step leaves out when the scene does not need it. Pruning is
+/// `Params::full`; the joint block is absent without joints by
+/// construction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Skips {
+    /// No friction rows (nor slack) for contacts with mu = 0.
+    pub frictionless_rows: bool,
+    /// PGS starts from the last step's impulses (by contact identity).
+    pub warm_start: bool,
+}
+
+impl Default for Skips {
+    fn default() -> Self {
+        Skips {
+            frictionless_rows: true,
+            warm_start: true,
+        }
+    }
 }
 
 /// Initial pose and twist of a body, world frame.
@@ -212,6 +236,8 @@ impl Model {
                 contact_margin: s.contact_margin,
                 full: false,
                 sphere_contacts: s.sphere_contacts,
+                skips: Skips::default(),
+                position_update: s.position_update,
             },
             initial,
         }

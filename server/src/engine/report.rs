@@ -77,6 +77,9 @@ pub struct StepReport {
     /// plus builds whose joint block was singular (redundant joints) and
     /// was regularised (see `mlcp::reduce_joints`).
     pub regularized: usize,
+    /// Contacts that started the step deeper than `project::PENETRATION_SLOP`
+    /// and were projected out (positions moved, velocities kept).
+    pub projected: usize,
     pub max_penetration: f64,
     pub max_joint_error: f64,
     pub energy: Energy,

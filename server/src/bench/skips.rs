@@ -1,0 +1,211 @@
+//! `cosim-server bench skips`: what each skip of the step saves, from the
+//! step report's per-stage timings, with the skip on and off on the same
+//! scene in one run, and how far apart the two trajectories end up (the
+//! skips must not change the answer).
+
+use crate::engine::{Engine, Model, Timings};
+use cosim_shared::{Scene, SolverChoice};
+use std::fmt::Write as _;
+
+const FRICTIONLESS: &str = include_str!("../../../examples/scenes/frictionless.toml");
+
+/// Medians of the stage timings (s) over a run, and the positions of every
+/// step.
+pub struct Run {
+    pub stages: Timings,
+    pub positions: Vec<Vec<[f64; 3]>>,
+    pub failures: usize,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// Runs `model` for `steps` steps.
+pub fn run(model: Model, steps: u64) -> Run {
+    let mut e = Engine::new(model);
+    let mut t: [Vec<f64>; 6] = Default::default();
+    let mut positions = Vec::new();
+    let mut failures = 0;
+    for _ in 0..steps {
+        let r = e.step();
+        if r.error.is_some() {
+            failures += 1;
+            break;
+        }
+        let s = r.timings;
+        for (v, x) in t.iter_mut().zip([
+            s.collision,
+            s.assemble,
+            s.solve,
+            s.integrate,
+            s.measure,
+            s.total,
+        ]) {
+            v.push(x);
+        }
+        positions.push(e.state().bodies.iter().map(|b| b.x.into()).collect());
+    }
+    let [a, b, c, d, f, g] = &mut t;
+    Run {
+        stages: Timings {
+            collision: median(a),
+            assemble: median(b),
+            solve: median(c),
+            integrate: median(d),
+            measure: median(f),
+            total: median(g),
+        },
+        positions,
+        failures,
+    }
+}
+
+/// Largest position difference between two runs over their common steps.
+pub fn distance(a: &Run, b: &Run) -> f64 {
+    let mut d: f64 = 0.0;
+    for (xa, xb) in a.positions.iter().zip(&b.positions) {
+        for (p, q) in xa.iter().zip(xb) {
+            let e = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+            d = d.max(e);
+        }
+    }
+    d
+}
+
+/// Largest difference of the new velocities (m/s, rad/s) over a run with
+/// the skip on, when each step is also taken from the same state with the
+/// skip off: whether the skip changes a step's answer, free of the
+/// trajectory's chaos (a PGS run started differently drifts apart at the
+/// solver's tolerance, and the reference scene amplifies that to O(1)).
+/// Steps where either side stopped at the PGS iteration cap are not
+/// compared (their answer is wherever the sweeps stopped) but counted.
+pub fn per_step_difference(on: Model, off: Model, steps: u64) -> PerStep {
+    let mut a = Engine::new(on);
+    let mut b = Engine::new(off);
+    let mut out = PerStep::default();
+    for _ in 0..steps {
+        b.set_state(a.state().clone());
+        let (ra, rb) = (a.step(), b.step());
+        if ra.error.is_some() || rb.error.is_some() {
+            out.difference = f64::INFINITY;
+            return out;
+        }
+        out.capped_on += usize::from(ra.not_converged);
+        out.capped_off += usize::from(rb.not_converged);
+        if ra.not_converged || rb.not_converged {
+            continue;
+        }
+        for (x, y) in a.state().bodies.iter().zip(&b.state().bodies) {
+            out.difference = out
+                .difference
+                .max((x.v - y.v).norm())
+                .max((x.w - y.w).norm());
+        }
+    }
+    out
+}
+
+/// See [`per_step_difference`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PerStep {
+    /// Largest velocity difference over the compared steps.
+    pub difference: f64,
+    /// Steps at the iteration cap with the skip on, and off.
+    pub capped_on: usize,
+    pub capped_off: usize,
+}
+
+/// One skip measured: the scene, the runs with it and without.
+pub struct Measured {
+    pub skip: &'static str,
+    pub scene: &'static str,
+    pub on: Run,
+    pub off: Run,
+    pub per_step: PerStep,
+}
+
+fn model(scene: &Scene, solver: SolverChoice) -> Model {
+    let mut s = scene.clone();
+    s.sim.solver = solver;
+    Model::from_scene(&s)
+}
+
+/// The skips on their scenes: pruning and warm start on the reference
+/// scene (Lemke, PGS), friction rows on the frictionless scene.
+pub fn measure(steps: u64) -> Result<Vec<Measured>, String> {
+    let reference = crate::scenes::reference().map_err(|e| e.to_string())?;
+    let frictionless =
+        Scene::parse(FRICTIONLESS, "frictionless.toml").map_err(|e| e.to_string())?;
+    let mut out = Vec::new();
+
+    let on = model(&reference, SolverChoice::Lemke);
+    let mut off = on.clone();
+    off.params.full = true;
+    out.push(Measured {
+        skip: "pruning (contacts that cannot close)",
+        scene: "reference, Lemke",
+        per_step: per_step_difference(on.clone(), off.clone(), steps),
+        on: run(on, steps),
+        off: run(off, steps),
+    });
+
+    let on = model(&frictionless, SolverChoice::Lemke);
+    let mut off = on.clone();
+    off.params.skips.frictionless_rows = false;
+    out.push(Measured {
+        skip: "no friction rows where mu = 0",
+        scene: "frictionless, Lemke",
+        per_step: per_step_difference(on.clone(), off.clone(), steps),
+        on: run(on, steps),
+        off: run(off, steps),
+    });
+
+    let on = model(&reference, SolverChoice::Pgs);
+    let mut off = on.clone();
+    off.params.skips.warm_start = false;
+    out.push(Measured {
+        skip: "PGS warm start",
+        scene: "reference, PGS",
+        per_step: per_step_difference(on.clone(), off.clone(), steps),
+        on: run(on, steps),
+        off: run(off, steps),
+    });
+    Ok(out)
+}
+
+fn us(x: f64) -> String {
+    format!("{:.2}", x * 1e6)
+}
+
+/// The table: median microseconds per stage with the skip on / off.
+pub fn table(ms: &[Measured], steps: u64) -> String {
+    let mut s = format!(
+        "| skip | scene ({steps} steps) | collision | assemble | solve | total | saved | trajectories apart (m) | one step apart (m/s) | steps at the PGS cap, on / off |\n|---|---|---|---|---|---|---|---|---|---|\n"
+    );
+    for m in ms {
+        let (a, b) = (&m.on.stages, &m.off.stages);
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} / {} | {} / {} | {} / {} | {} / {} | {:.0} % | {:.1e}{} | {:.1e} | {} / {} |",
+            m.skip,
+            m.scene,
+            us(a.collision),
+            us(b.collision),
+            us(a.assemble),
+            us(b.assemble),
+            us(a.solve),
+            us(b.solve),
+            us(a.total),
+            us(b.total),
+            100.0 * (1.0 - a.total / b.total),
+            distance(&m.on, &m.off),
+            if m.on.failures + m.off.failures > 0 { " (a run failed)" } else { "" },
+            m.per_step.difference,
+            m.per_step.capped_on,
+            m.per_step.capped_off
+        );
+    }
+    s
+}
