@@ -52,3 +52,41 @@ fn auto_is_lemke_on_small_problems_and_says_so() {
     }
     assert_eq!(lemke.state(), auto.state());
 }
+
+/// The fallback of `auto` inside the engine: on the reference scene Lemke
+/// alone ends on a ray at step 33,619 (both spheres touching each other and
+/// the floor while joined: a 20-unknown LCP of condition 2e17, found by the
+/// stress suite's long run). The same steps with `auto` go on: that step is
+/// solved by PGS and reported as such, every other step is Lemke's.
+#[test]
+fn auto_falls_back_to_pgs_where_lemke_fails() {
+    let scene = scenes::reference().expect("built-in scene");
+    let mut lemke = Engine::new(Model::from_scene(&scene));
+    let mut model = Model::from_scene(&scene);
+    model.params.solver = SolverChoice::Auto;
+    let mut auto = Engine::new(model);
+    let mut lemke_failure = None;
+    let mut fallbacks = Vec::new();
+    for _ in 0..34_000 {
+        let r = auto.step();
+        assert!(r.ok(), "auto step {} failed: {}", r.step, r.status());
+        if r.solver == "pgs (auto: lemke failed)" {
+            fallbacks.push(r.step);
+        } else {
+            assert_eq!(r.solver, "lemke (auto)", "step {}", r.step);
+        }
+        if lemke_failure.is_none() {
+            let l = lemke.step();
+            if let Some(e) = l.error {
+                lemke_failure = Some((auto.state().step, e.code()));
+            }
+        }
+    }
+    let (step, code) = lemke_failure.expect("Lemke alone fails within 34,000 steps");
+    assert_eq!(code, "ray_termination");
+    assert_eq!(
+        fallbacks.first(),
+        Some(&step),
+        "auto fell back at {fallbacks:?}, Lemke failed at {step}"
+    );
+}

@@ -474,9 +474,9 @@ pub fn machine() -> String {
 }
 
 /// A Markdown table per case: error and wall time per simulated second of
-/// every curve at h = 1e-2 and 1e-3, and at equal run time the error of our
-/// Lemke curve (interpolated log-log between its points) beside each
-/// peer's point.
+/// every curve at h = 1e-2 and 1e-3, and beside each peer's point the error
+/// of our Lemke curves (Euler and trapezoid position update) at the same
+/// run time, interpolated log-log between their points.
 pub fn summary(points: &[Point], machine: &str, notes: &[String]) -> String {
     let mut s = format!("# Work-precision\n\nMachine: {machine}, one thread per engine, all points from one run.\n\n");
     for n in notes {
@@ -496,14 +496,14 @@ pub fn summary(points: &[Point], machine: &str, notes: &[String]) -> String {
             case.error_name(),
             case.key()
         );
-        s.push_str("| engine | setting | h | error | s per simulated s | our Lemke n_d=8 at equal time |\n|---|---|---|---|---|---|\n");
-        let ours: Vec<(f64, f64)> = {
+        s.push_str("| engine | setting | h | error | s per simulated s | ours at equal time: lemke nd=8 | lemke nd=8 trapezoid |\n|---|---|---|---|---|---|---|\n");
+        let curve = |setting: &str| {
             let mut v: Vec<(f64, f64)> = points
                 .iter()
                 .filter(|p| {
                     p.case == case
                         && p.engine == "ours"
-                        && p.setting == "lemke nd=8"
+                        && p.setting == setting
                         && p.failure.is_none()
                 })
                 .map(|p| (p.wall_per_sim_s, p.score.error))
@@ -511,15 +511,18 @@ pub fn summary(points: &[Point], machine: &str, notes: &[String]) -> String {
             v.sort_by(|a, b| a.0.total_cmp(&b.0));
             v
         };
+        let (euler, trapezoid) = (curve("lemke nd=8"), curve("lemke nd=8 trapezoid"));
         for p in points.iter().filter(|p| p.case == case) {
             if !(p.h == 1e-2 || p.h == 1e-3) {
                 continue;
             }
-            let equal = if p.engine == "ours" {
-                String::new()
-            } else {
-                at_time(&ours, p.wall_per_sim_s)
-                    .map_or("outside our range".into(), |e| format!("{e:.3e}"))
+            let equal = |c: &[(f64, f64)]| {
+                if p.engine == "ours" {
+                    String::new()
+                } else {
+                    at_time(c, p.wall_per_sim_s)
+                        .map_or("outside our range".into(), |e| format!("{e:.3e}"))
+                }
             };
             let err = match &p.failure {
                 Some(f) => format!("failed: {f}"),
@@ -527,8 +530,13 @@ pub fn summary(points: &[Point], machine: &str, notes: &[String]) -> String {
             };
             let _ = writeln!(
                 s,
-                "| {} | {} | {:e} | {err} | {:.3e} | {equal} |",
-                p.engine, p.setting, p.h, p.wall_per_sim_s
+                "| {} | {} | {:e} | {err} | {:.3e} | {} | {} |",
+                p.engine,
+                p.setting,
+                p.h,
+                p.wall_per_sim_s,
+                equal(&euler),
+                equal(&trapezoid)
             );
         }
     }
