@@ -94,6 +94,22 @@ fn stages(c: &mut Criterion) {
             black_box(lemke.solve(&lcp, &mut z[..*n]).is_ok())
         })
     });
+    // The trivial-LCP shortcut: the same matrices with q >= 0 (every
+    // contact separating), which Lemke answers with z = 0 before it builds
+    // a tableau; against the pivoting solve above, what the shortcut saves.
+    let trivial: Vec<(usize, Vec<f64>, Vec<f64>)> = lcps
+        .iter()
+        .map(|(n, m, q)| (*n, m.clone(), q.iter().map(|x| x.abs()).collect()))
+        .collect();
+    group.bench_function("lemke_trivial", |b| {
+        let mut i = 0;
+        b.iter(|| {
+            let (n, m, q) = &trivial[i % trivial.len()];
+            i += 1;
+            let lcp = cosim_server::engine::solver::Lcp { n: *n, m, q };
+            black_box(lemke.solve(&lcp, &mut z[..*n]).is_ok())
+        })
+    });
     group.finish();
 }
 
