@@ -45,13 +45,7 @@ pub fn energy(model: &Model, state: &State) -> Energy {
 /// Deepest penetration over every potential contact (m, >= 0).
 pub fn max_penetration(model: &Model, state: &State, scratch: &mut Vec<Geometry>) -> f64 {
     detect(model, state, scratch);
-    let counts = |g: &&Geometry| {
-        model.params.sphere_contacts || matches!(g.b, super::collision::Counterpart::Plane(_))
-    };
-    scratch
-        .iter()
-        .filter(counts)
-        .fold(0.0f64, |a, g| a.max(-g.gap))
+    scratch.iter().fold(0.0f64, |a, g| a.max(-g.gap))
 }
 
 /// Largest joint error `|psi_b|` (m).

@@ -91,6 +91,15 @@ struct Workspace {
     impulsive: Vec<bool>,
 }
 
+impl Workspace {
+    /// Collision, contact set and inverse masses of `state`.
+    fn contact_set(&mut self, model: &Model, state: &State) {
+        collision::detect(model, state, &mut self.geoms);
+        contact::build(model, state, &self.geoms, &mut self.contacts);
+        applied::inverse_masses(model, state, &mut self.minv);
+    }
+}
+
 pub struct Engine {
     model: Model,
     state: State,
@@ -228,9 +237,7 @@ impl Engine {
         let _span = tracing::trace_span!("collision").entered();
         let t0 = Instant::now();
         let ws = &mut self.ws;
-        collision::detect(&self.model, &self.state, &mut ws.geoms);
-        contact::build(&self.model, &self.state, &ws.geoms, &mut ws.contacts);
-        applied::inverse_masses(&self.model, &self.state, &mut ws.minv);
+        ws.contact_set(&self.model, &self.state);
         self.projected = match project::deep_penetration(
             &ws.contacts,
             &ws.minv,
@@ -247,9 +254,8 @@ impl Engine {
             }
         };
         if self.projected > 0 {
-            collision::detect(&self.model, &self.state, &mut ws.geoms);
-            contact::build(&self.model, &self.state, &ws.geoms, &mut ws.contacts);
-            applied::inverse_masses(&self.model, &self.state, &mut ws.minv);
+            // The bodies moved: their contacts are those of the new positions.
+            ws.contact_set(&self.model, &self.state);
         }
         self.collision_time = t0.elapsed().as_secs_f64();
         self.prepared = true;
@@ -443,7 +449,7 @@ impl Engine {
             if !ws.nu.iter().all(|x| x.is_finite()) {
                 return Err(StepError::NonFinite);
             }
-            let added = prune::check_left_out(&mut ws.contacts, &ws.nu, p);
+            let added = prune::check_left_out(&mut ws.contacts, &ws.nu, p.h);
             if added > 0 {
                 report.resolves += 1;
                 continue;

@@ -243,10 +243,16 @@ impl Model {
         }
     }
 
-    /// Number of potential contacts: every sphere against every plane and
-    /// every other sphere (7 in the reference scene).
+    /// Number of potential contacts: every sphere against every plane and,
+    /// unless `sphere_contacts` is off, every other sphere (7 in the
+    /// reference scene).
     pub fn potential_contacts(&self) -> usize {
         let n = self.bodies.len();
-        n * self.planes.len() + n * n.saturating_sub(1) / 2
+        let pairs = if self.params.sphere_contacts {
+            n * n.saturating_sub(1) / 2
+        } else {
+            0
+        };
+        n * self.planes.len() + pairs
     }
 }

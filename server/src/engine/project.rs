@@ -23,7 +23,6 @@
 use super::applied::InvMass;
 use super::contact::Contact;
 use super::model::Params;
-use super::prune::enabled;
 use super::rows::Row;
 use super::solver::{Lcp, Lemke, LemkeError};
 use super::state::State;
@@ -55,7 +54,7 @@ pub fn deep_penetration(
 ) -> Result<usize, LemkeError> {
     let deep = contacts
         .iter()
-        .filter(|c| enabled(c, p) && c.geom.gap < -PENETRATION_SLOP)
+        .filter(|c| c.geom.gap < -PENETRATION_SLOP)
         .count();
     if deep == 0 {
         return Ok(0);
@@ -64,10 +63,7 @@ pub fn deep_penetration(
     // a body into another.
     ws.rows.clear();
     ws.q.clear();
-    for c in contacts
-        .iter()
-        .filter(|c| enabled(c, p) && c.geom.gap < p.contact_margin)
-    {
+    for c in contacts.iter().filter(|c| c.geom.gap < p.contact_margin) {
         ws.rows.push(Row::contact(c, c.geom.normal));
         ws.q.push(c.geom.gap);
     }

@@ -36,29 +36,23 @@ pub fn select(contacts: &mut [Contact], state: &State, nu_free: &[f64], p: &Para
         state.bodies[i].v.norm().max(free.norm())
     };
     for c in contacts.iter_mut() {
-        c.in_lcp = enabled(c, p)
-            && (p.full || {
-                let mut s = speed(c.geom.a);
-                if let Counterpart::Body(j) = c.geom.b {
-                    s += speed(j);
-                }
-                c.geom.gap <= p.h * s + p.contact_margin
-            });
+        c.in_lcp = p.full || {
+            let mut s = speed(c.geom.a);
+            if let Counterpart::Body(j) = c.geom.b {
+                s += speed(j);
+            }
+            c.geom.gap <= p.h * s + p.contact_margin
+        };
     }
-}
-
-/// Whether the scene lets this contact exist at all (`sphere_contacts`).
-pub fn enabled(c: &Contact, p: &Params) -> bool {
-    p.sphere_contacts || matches!(c.geom.b, Counterpart::Plane(_))
 }
 
 /// Adds every left-out contact that the new velocities `nu` would close
 /// within the step; returns how many were added.
-pub fn check_left_out(contacts: &mut [Contact], nu: &[f64], p: &Params) -> usize {
+pub fn check_left_out(contacts: &mut [Contact], nu: &[f64], h: f64) -> usize {
     let mut added = 0;
-    for c in contacts.iter_mut().filter(|c| !c.in_lcp && enabled(c, p)) {
+    for c in contacts.iter_mut().filter(|c| !c.in_lcp) {
         let v_n = Row::contact(c, c.geom.normal).velocity(nu);
-        if c.geom.gap / p.h + v_n < 0.0 {
+        if c.geom.gap / h + v_n < 0.0 {
             c.in_lcp = true;
             added += 1;
         }

@@ -37,6 +37,9 @@ pub struct Geometry {
 }
 
 /// Fills `out` with every potential contact of the scene, in canonical order.
+/// With `sphere_contacts = false` the sphere pairs are not potential
+/// contacts at all; they come last in the order, so the other contacts keep
+/// their identities.
 pub fn detect(model: &Model, state: &State, out: &mut Vec<Geometry>) {
     out.clear();
     for (i, body) in model.bodies.iter().enumerate() {
@@ -44,6 +47,9 @@ pub fn detect(model: &Model, state: &State, out: &mut Vec<Geometry>) {
         for (p, plane) in model.planes.iter().enumerate() {
             out.push(sphere_plane(i, state.bodies[i].x, radius, p, plane));
         }
+    }
+    if !model.params.sphere_contacts {
+        return;
     }
     for i in 0..model.bodies.len() {
         for j in i + 1..model.bodies.len() {
