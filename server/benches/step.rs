@@ -83,33 +83,26 @@ fn stages(c: &mut Criterion) {
             (n, m.to_vec(), q.to_vec())
         })
         .collect();
-    let mut lemke = cosim_server::engine::solver::Lemke::new();
-    let mut z = vec![0.0; lcps.iter().map(|l| l.0).max().unwrap_or(0)];
-    group.bench_function("lemke_solve", |b| {
-        let mut i = 0;
-        b.iter(|| {
-            let (n, m, q) = &lcps[i % lcps.len()];
-            i += 1;
-            let lcp = cosim_server::engine::solver::Lcp { n: *n, m, q };
-            black_box(lemke.solve(&lcp, &mut z[..*n]).is_ok())
-        })
-    });
-    // The trivial-LCP shortcut: the same matrices with q >= 0 (every
-    // contact separating), which Lemke answers with z = 0 before it builds
-    // a tableau; against the pivoting solve above, what the shortcut saves.
+    // Lemke alone on those LCPs, round robin; and on the same matrices with
+    // q >= 0 (every contact separating), which Lemke answers with z = 0
+    // before it builds a tableau: what the trivial-LCP shortcut saves.
     let trivial: Vec<(usize, Vec<f64>, Vec<f64>)> = lcps
         .iter()
         .map(|(n, m, q)| (*n, m.clone(), q.iter().map(|x| x.abs()).collect()))
         .collect();
-    group.bench_function("lemke_trivial", |b| {
-        let mut i = 0;
-        b.iter(|| {
-            let (n, m, q) = &trivial[i % trivial.len()];
-            i += 1;
-            let lcp = cosim_server::engine::solver::Lcp { n: *n, m, q };
-            black_box(lemke.solve(&lcp, &mut z[..*n]).is_ok())
-        })
-    });
+    let mut lemke = cosim_server::engine::solver::Lemke::new();
+    let mut z = vec![0.0; lcps.iter().map(|l| l.0).max().unwrap_or(0)];
+    for (name, set) in [("lemke_solve", &lcps), ("lemke_trivial", &trivial)] {
+        group.bench_function(name, |b| {
+            let mut i = 0;
+            b.iter(|| {
+                let (n, m, q) = &set[i % set.len()];
+                i += 1;
+                let lcp = cosim_server::engine::solver::Lcp { n: *n, m, q };
+                black_box(lemke.solve(&lcp, &mut z[..*n]).is_ok())
+            })
+        });
+    }
     group.finish();
 }
 

@@ -33,24 +33,17 @@ struct Args {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    let mut sweep = if args.quick { Sweep::quick() } else { Sweep::full() };
+    let mut sweep = if args.quick {
+        Sweep::quick()
+    } else {
+        Sweep::full()
+    };
     if !args.cases.is_empty() {
         sweep.cases = args.cases.iter().filter_map(|c| CaseId::parse(c)).collect();
     }
     let machine = accuracy::machine();
     println!("# peers on {machine}");
-    let show = |p: &Point| {
-        println!(
-            "{:6} {:4} {:26} h={:<7e} {:>10.3e} s/sim-s  error {:.3e} {}",
-            p.engine,
-            p.case.key(),
-            p.setting,
-            p.h,
-            p.wall_per_sim_s,
-            p.score.error,
-            p.failure.as_deref().unwrap_or("")
-        )
-    };
+    let show = |p: &Point| println!("{}", p.line());
     let (mut points, mut notes) = match accuracy::sweep(&sweep, show) {
         Ok(r) => r,
         Err(e) => {
@@ -80,7 +73,9 @@ fn main() -> ExitCode {
     }
     match mujoco::available(&args.python) {
         Ok(version) => {
-            notes.push(format!("MuJoCo {version} (Python package; whole runs timed with mujoco.rollout, a C loop)"));
+            notes.push(format!(
+                "MuJoCo {version} (Python package; whole runs timed with mujoco.rollout, a C loop)"
+            ));
             for &case in &sweep.cases {
                 // Euler is MuJoCo's default; RK4 what a user picks for a
                 // smooth system (it pays on the contact-free chain).
@@ -99,25 +94,15 @@ fn main() -> ExitCode {
         }
         Err(e) => notes.push(format!("MuJoCo skipped: {e}")),
     }
-    notes.push(format!("Rapier {} (rapier3d-f64, default integration parameters: 4 solver iterations)", rapier::VERSION));
+    notes.push(format!(
+        "Rapier {} (rapier3d-f64, default integration parameters: 4 solver iterations)",
+        rapier::VERSION
+    ));
     for n in &notes {
         println!("{n}");
     }
-    if let Err(e) = std::fs::create_dir_all(&args.out) {
-        eprintln!("error: {}: {e}", args.out.display());
-        return ExitCode::FAILURE;
-    }
-    let csv = args.out.join("accuracy.csv");
-    let text = accuracy::summary(&points, &machine, &notes);
-    if let Err(e) = std::fs::write(&csv, accuracy::csv(&points))
-        .and_then(|_| std::fs::write(args.out.join("accuracy.md"), text))
-    {
-        eprintln!("error: {}: {e}", csv.display());
-        return ExitCode::FAILURE;
-    }
-    match accuracy::diagrams(&points, &args.out, &machine) {
+    match accuracy::write(&points, &notes, &args.out, &machine) {
         Ok(files) => {
-            println!("wrote {}", csv.display());
             for f in files {
                 println!("wrote {}", f.display());
             }

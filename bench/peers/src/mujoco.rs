@@ -2,7 +2,7 @@
 //! our scene, steps it, writes the trajectory and times whole runs with
 //! `mujoco.rollout`; the trajectory is scored here by our `Scorer`.
 
-use cosim_server::bench::accuracy::{Point, Trajectory};
+use cosim_server::bench::accuracy::{no_figure, Point, Trajectory};
 use cosim_server::bench::cases::{corner_forces, CaseId, Pose, Sample, Scorer};
 use std::path::PathBuf;
 use std::process::Command;
@@ -12,13 +12,19 @@ const SCRIPT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/mujoco_case.py");
 /// MuJoCo's version, or why it cannot be used.
 pub fn available(python: &str) -> Result<String, String> {
     let out = Command::new(python)
-        .args(["-c", "import mujoco, mujoco.rollout; print(mujoco.__version__)"])
+        .args([
+            "-c",
+            "import mujoco, mujoco.rollout; print(mujoco.__version__)",
+        ])
         .output()
         .map_err(|e| format!("{python}: {e}"))?;
     if !out.status.success() {
         return Err(format!(
             "the mujoco package does not import (pip install mujoco): {}",
-            String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("")
+            String::from_utf8_lossy(&out.stderr)
+                .lines()
+                .last()
+                .unwrap_or("")
         ));
     }
     Ok(String::from_utf8_lossy(&out.stdout).trim().to_string())
@@ -100,9 +106,7 @@ pub fn run(
         scorer.observe(&s);
     }
     let score = scorer.finish();
-    if failure.is_none() && !score.error.is_finite() {
-        failure = Some("no figure (e.g. no apex within the run)".into());
-    }
+    let failure = no_figure(failure, &score);
     Ok(Point {
         engine: "mujoco".into(),
         setting: format!("{integrator}, Newton, pyramidal"),

@@ -1,7 +1,7 @@
 //! Rapier (rapier3d-f64) on the cases: the scene built as a Rapier user
 //! would, with Rapier's default integration parameters.
 
-use cosim_server::bench::accuracy::{Point, Trajectory};
+use cosim_server::bench::accuracy::{median_run_time, no_figure, Point, Trajectory};
 use cosim_server::bench::cases::{CaseId, Pose, Sample, Scorer};
 use cosim_shared::Scene;
 use rapier3d_f64::na::Unit;
@@ -23,8 +23,10 @@ struct World {
 }
 
 fn build(scene: &Scene) -> World {
-    let mut world = PhysicsWorld::default();
-    world.gravity = vec3(scene.sim.gravity);
+    let mut world = PhysicsWorld {
+        gravity: vec3(scene.sim.gravity),
+        ..PhysicsWorld::default()
+    };
     world.integration_parameters.dt = scene.sim.dt;
     // Spheres collide with planes (group 2) and, unless the scene says
     // otherwise, with each other (group 1).
@@ -42,7 +44,11 @@ fn build(scene: &Scene) -> World {
             .restitution(p.restitution)
             .friction_combine_rule(CoefficientCombineRule::Min)
             .restitution_combine_rule(CoefficientCombineRule::Max)
-            .collision_groups(InteractionGroups::new(Group::GROUP_2, Group::ALL, InteractionTestMode::And));
+            .collision_groups(InteractionGroups::new(
+                Group::GROUP_2,
+                Group::ALL,
+                InteractionTestMode::And,
+            ));
         planes.push(world.insert_collider(c, Some(body)));
     }
     let mut bodies = Vec::new();
@@ -121,7 +127,8 @@ fn sample(w: &World, t: f64, out: &mut Sample) {
             if let Some(pair) = w.world.narrow_phase.contact_pair(*ci, *cp) {
                 let f = pair.total_impulse().length() / dt;
                 if f > 0.0 {
-                    out.forces.push((format!("{}/{}", w.names[i], w.plane_names[p]), f));
+                    out.forces
+                        .push((format!("{}/{}", w.names[i], w.plane_names[p]), f));
                 }
             }
         }
@@ -129,7 +136,8 @@ fn sample(w: &World, t: f64, out: &mut Sample) {
             if let Some(pair) = w.world.narrow_phase.contact_pair(*ci, *cj) {
                 let f = pair.total_impulse().length() / dt;
                 if f > 0.0 {
-                    out.forces.push((format!("{}/{}", w.names[i], w.names[j]), f));
+                    out.forces
+                        .push((format!("{}/{}", w.names[i], w.names[j]), f));
                 }
             }
         }
@@ -159,30 +167,27 @@ pub fn run(case: CaseId, h: f64, reference: Option<&Trajectory>) -> Vec<Point> {
         }
         scorer.observe(&s);
     }
-    let mut times = vec![elapsed];
-    let mut spent = elapsed;
-    while failure.is_none() && spent < 0.3 && times.len() < 9 {
-        let mut w = build(&scene);
-        let t0 = Instant::now();
-        for _ in 0..steps {
-            w.world.step();
-        }
-        let t = t0.elapsed().as_secs_f64();
-        times.push(t);
-        spent += t;
-    }
-    times.sort_by(f64::total_cmp);
+    let wall = if failure.is_some() {
+        elapsed
+    } else {
+        median_run_time(elapsed, || {
+            let mut w = build(&scene);
+            let t0 = Instant::now();
+            for _ in 0..steps {
+                w.world.step();
+            }
+            t0.elapsed().as_secs_f64()
+        })
+    };
     let score = scorer.finish();
-    if failure.is_none() && !score.error.is_finite() {
-        failure = Some("no figure (e.g. no apex within the run)".into());
-    }
+    let failure = no_figure(failure, &score);
     vec![Point {
         engine: "rapier".into(),
         setting: "default (4 iterations)".into(),
         case,
         h,
         steps,
-        wall_per_sim_s: times[times.len() / 2] / case.duration(),
+        wall_per_sim_s: wall / case.duration(),
         score,
         failure,
     }]

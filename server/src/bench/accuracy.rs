@@ -9,7 +9,7 @@ use crate::engine::solver::PgsParams;
 use crate::engine::{Engine, ImpulseKind, Model};
 use crate::output::{contact_name, num};
 use crate::plot::{color, FONT};
-use cosim_shared::{FrictionCone, PositionUpdate, SolverChoice};
+use cosim_shared::{FrictionCone, PositionUpdate, Scene, SolverChoice};
 use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -86,6 +86,23 @@ pub const CSV_HEADER: &str =
     "engine,setting,case,h,steps,wall_s_per_sim_s,us_per_step,error,error_name,metrics,failure";
 
 impl Point {
+    /// One line of progress for the terminal.
+    pub fn line(&self) -> String {
+        format!(
+            "{:6} {:4} {:28} h={:<7e} {:>10.3e} s/sim-s  error {:.3e}{}",
+            self.engine,
+            self.case.key(),
+            self.setting,
+            self.h,
+            self.wall_per_sim_s,
+            self.score.error,
+            self.failure
+                .as_deref()
+                .map(|f| format!("  FAILED {f}"))
+                .unwrap_or_default()
+        )
+    }
+
     pub fn csv(&self) -> String {
         let metrics: Vec<String> = self
             .score
@@ -134,14 +151,15 @@ pub fn sample(engine: &Engine, out: &mut Sample) {
     }
 }
 
-fn model(case: CaseId, setting: &Setting, h: f64) -> Result<Model, String> {
+/// The case's scene with the setting applied, and its model.
+fn model(case: CaseId, setting: &Setting, h: f64) -> Result<(Scene, Model), String> {
     let mut scene = case.scene(h, setting.nd).map_err(|e| e.to_string())?;
     scene.sim.solver = setting.solver;
     scene.sim.friction_cone = setting.cone;
     scene.sim.position_update = setting.position_update;
     let mut model = Model::from_scene(&scene);
     model.params.full = setting.full;
-    Ok(model)
+    Ok((scene, model))
 }
 
 fn engine(model: Model, setting: &Setting) -> Engine {
@@ -167,8 +185,7 @@ pub fn run_ours(
     h: f64,
     reference: Option<&Trajectory>,
 ) -> Result<Point, String> {
-    let model = model(case, setting, h)?;
-    let scene = case.scene(h, setting.nd).map_err(|e| e.to_string())?;
+    let (scene, model) = model(case, setting, h)?;
     let steps = scene.step_count();
     let mut scorer = Scorer::new(case, &scene, reference.cloned());
     let mut e = engine(model.clone(), setting);
@@ -186,29 +203,50 @@ pub fn run_ours(
         sample(&e, &mut s);
         scorer.observe(&s);
     }
-    // Timing: more runs without the scorer, median.
-    let mut times = vec![elapsed];
-    let mut spent = elapsed;
-    while failure.is_none() && spent < TIMING_BUDGET_S && times.len() < MAX_REPEATS {
-        let mut e = engine(model.clone(), setting);
-        let t0 = Instant::now();
-        for _ in 0..steps {
-            std::hint::black_box(e.step());
-        }
-        let t = t0.elapsed().as_secs_f64();
-        times.push(t);
-        spent += t;
-    }
-    times.sort_by(f64::total_cmp);
+    let wall = if failure.is_some() {
+        elapsed
+    } else {
+        median_run_time(elapsed, || {
+            let mut e = engine(model.clone(), setting);
+            let t0 = Instant::now();
+            for _ in 0..steps {
+                std::hint::black_box(e.step());
+            }
+            t0.elapsed().as_secs_f64()
+        })
+    };
     Ok(Point {
         engine: "ours".into(),
         setting: setting.name.clone(),
         case,
         h,
         steps,
-        wall_per_sim_s: times[times.len() / 2] / case.duration(),
+        wall_per_sim_s: wall / case.duration(),
         score: scorer.finish(),
         failure,
+    })
+}
+
+/// The median wall time (s) of a run: `first`, the scored run's stepping
+/// time, and runs of `again` (without the scorer) until `TIMING_BUDGET_S`
+/// is spent or there are `MAX_REPEATS` runs.
+pub fn median_run_time(first: f64, mut again: impl FnMut() -> f64) -> f64 {
+    let mut times = vec![first];
+    let mut spent = first;
+    while spent < TIMING_BUDGET_S && times.len() < MAX_REPEATS {
+        let t = again();
+        times.push(t);
+        spent += t;
+    }
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+/// A run that ended without its figure (S3 without an apex: no bounce
+/// within the run) fails with that reason, so that it is not drawn.
+pub fn no_figure(failure: Option<String>, score: &Score) -> Option<String> {
+    failure.or_else(|| {
+        (!score.error.is_finite()).then(|| "no figure (e.g. no apex within the run)".to_string())
     })
 }
 
@@ -223,7 +261,7 @@ pub const REFERENCE_SPACING: f64 = 0.01;
 /// `REFERENCE_SPACING`.
 pub fn reference_trajectory(h: f64, nd: usize) -> Result<Trajectory, String> {
     let setting = Setting::lemke(nd, false);
-    let mut e = engine(model(CaseId::Reference, &setting, h)?, &setting);
+    let mut e = engine(model(CaseId::Reference, &setting, h)?.1, &setting);
     let every = (REFERENCE_SPACING / h).round() as u64;
     let steps = (CaseId::Reference.duration() / h).round() as u64;
     let mut out = Vec::new();
@@ -247,14 +285,9 @@ pub fn reference_trajectory(h: f64, nd: usize) -> Result<Trajectory, String> {
 
 /// Largest position difference between two trajectories at common times.
 pub fn trajectory_distance(a: &Trajectory, b: &Trajectory) -> f64 {
-    let mut d: f64 = 0.0;
-    for ((_, xa), (_, xb)) in a.iter().zip(b) {
-        for (p, q) in xa.iter().zip(xb) {
-            let e = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
-            d = d.max(e);
-        }
-    }
-    d
+    a.iter()
+        .zip(b)
+        .fold(0.0, |d, ((_, xa), (_, xb))| d.max(super::farthest(xa, xb)))
 }
 
 /// What to sweep.
@@ -419,8 +452,7 @@ fn draw(
         let mut line: Vec<(f64, f64)> = pts
             .iter()
             .filter(|p| &p.engine == engine && &p.setting == setting)
-            .map(|p| (p.h, p.wall_per_sim_s, p.score.error.max(ERROR_FLOOR)))
-            .map(|(_, x, y)| (x, y))
+            .map(|p| (p.wall_per_sim_s, p.score.error.max(ERROR_FLOOR)))
             .collect();
         line.sort_by(|a, b| a.0.total_cmp(&b.0));
         let c = color(i);
@@ -550,4 +582,24 @@ fn at_time(curve: &[(f64, f64)], t: f64) -> Option<f64> {
     let floor = |e: f64| e.max(ERROR_FLOOR).ln();
     let f = (t.ln() - t0.ln()) / (t1.ln() - t0.ln());
     Some((floor(e0) + f * (floor(e1) - floor(e0))).exp())
+}
+
+/// Writes `accuracy.csv`, `accuracy.md` and the diagrams into `dir`;
+/// returns the files written.
+pub fn write(
+    points: &[Point],
+    notes: &[String],
+    dir: &Path,
+    machine: &str,
+) -> Result<Vec<PathBuf>, String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let mut files = vec![dir.join("accuracy.csv"), dir.join("accuracy.md")];
+    for (path, text) in files
+        .iter()
+        .zip([csv(points), summary(points, machine, notes)])
+    {
+        std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    }
+    files.extend(diagrams(points, dir, machine)?);
+    Ok(files)
 }

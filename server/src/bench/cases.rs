@@ -6,6 +6,7 @@
 //! peers package (`bench/peers`) are scored by this same code: one
 //! definition of "error" for everybody on the diagrams.
 
+use super::text::{force, joint, plane, sphere};
 use cosim_shared::{Scene, SceneError};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
@@ -75,9 +76,9 @@ pub fn bounce_apex() -> f64 {
 /// the y = 0 wall (its y part) and through A into the x = 0 wall (its x
 /// part); each floor carries its sphere's weight; nothing pushes A into
 /// the y = 0 wall, and B does not touch the x = 0 wall.
-pub fn corner_forces() -> Vec<(&'static str, f64)> {
+pub fn corner_forces() -> [(&'static str, f64); 6] {
     let half = S6_FORCE / 2f64.sqrt();
-    vec![
+    [
         ("A/floor", G),
         ("A/wall_x", half),
         ("A/wall_y", 0.0),
@@ -164,33 +165,16 @@ impl CaseId {
                     [0.0; 3],
                     0.5,
                     0.0,
-                    [0.0; 3],
                 ) + &plane("incline", n, [0.0; 3], 0.5, 0.0)
             }
             CaseId::SlideToRoll => {
-                sim + &sphere(
-                    "ball",
-                    R,
-                    1.0,
-                    [0.0, 0.0, R],
-                    [S2_V0, 0.0, 0.0],
-                    S2_MU,
-                    0.0,
-                    [0.0; 3],
-                ) + &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], S2_MU, 0.0)
+                sim + &sphere("ball", R, 1.0, [0.0, 0.0, R], [S2_V0, 0.0, 0.0], S2_MU, 0.0)
+                    + &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], S2_MU, 0.0)
             }
             CaseId::Bounce => {
                 // The drop height is that of the sphere's lowest point.
-                sim + &sphere(
-                    "ball",
-                    R,
-                    1.0,
-                    [0.0, 0.0, S3_DROP + R],
-                    [0.0; 3],
-                    0.0,
-                    S3_E,
-                    [0.0; 3],
-                ) + &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.0, S3_E)
+                sim + &sphere("ball", R, 1.0, [0.0, 0.0, S3_DROP + R], [0.0; 3], 0.0, S3_E)
+                    + &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.0, S3_E)
             }
             CaseId::Chain => {
                 // Link i pivots about the centre of sphere i-1 (the first
@@ -209,7 +193,6 @@ impl CaseId {
                         [0.0; 3],
                         0.0,
                         0.0,
-                        [0.0; 3],
                     );
                 }
                 for i in 0..S4_LINKS {
@@ -218,26 +201,20 @@ impl CaseId {
                     } else {
                         format!("s{}", i - 1)
                     };
-                    s += &format!(
-                        "[[joint]]\nname = \"j{i}\"\ntype = \"spherical\"\nbody_a = \"{a}\"\nbody_b = \"s{i}\"\nanchor = [{:e}, 0.0, 0.0]\n",
-                        S4_LINK * i as f64
+                    s += &joint(
+                        &format!("j{i}"),
+                        &a,
+                        &format!("s{i}"),
+                        [S4_LINK * i as f64, 0.0, 0.0],
                     );
                 }
                 s
             }
             CaseId::Corner => {
                 let f = S6_FORCE / 2f64.sqrt();
-                sim + &sphere("A", R, 1.0, [R, R, R], [0.0; 3], 0.0, 0.0, [0.0; 3])
-                    + &sphere(
-                        "B",
-                        R,
-                        1.0,
-                        [3.0 * R, R, R],
-                        [0.0; 3],
-                        0.0,
-                        0.0,
-                        [-f, -f, 0.0],
-                    )
+                sim + &sphere("A", R, 1.0, [R, R, R], [0.0; 3], 0.0, 0.0)
+                    + &sphere("B", R, 1.0, [3.0 * R, R, R], [0.0; 3], 0.0, 0.0)
+                    + &force([-f, -f, 0.0])
                     + &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.0, 0.0)
                     + &plane("wall_x", [1.0, 0.0, 0.0], [0.0; 3], 0.0, 0.0)
                     + &plane("wall_y", [0.0, 1.0, 0.0], [0.0; 3], 0.0, 0.0)
@@ -245,30 +222,6 @@ impl CaseId {
             CaseId::Reference => unreachable!("the reference scene is built in"),
         }
     }
-}
-
-#[allow(clippy::too_many_arguments)]
-fn sphere(
-    name: &str,
-    r: f64,
-    m: f64,
-    x: [f64; 3],
-    v: [f64; 3],
-    mu: f64,
-    e: f64,
-    force: [f64; 3],
-) -> String {
-    format!(
-        "[[body]]\nname = \"{name}\"\nradius = {r:e}\nmass = {m:e}\nposition = [{:e}, {:e}, {:e}]\nvelocity = [{:e}, {:e}, {:e}]\nfriction = {mu:e}\nrestitution = {e:e}\nforce = [{:e}, {:e}, {:e}]\n",
-        x[0], x[1], x[2], v[0], v[1], v[2], force[0], force[1], force[2]
-    )
-}
-
-fn plane(name: &str, n: [f64; 3], point: [f64; 3], mu: f64, e: f64) -> String {
-    format!(
-        "[[plane]]\nname = \"{name}\"\nnormal = [{:e}, {:e}, {:e}]\npoint = [{:e}, {:e}, {:e}]\nfriction = {mu:e}\nrestitution = {e:e}\n",
-        n[0], n[1], n[2], point[0], point[1], point[2]
-    )
 }
 
 /// Pose and twist of one body, world frame; `q` is `[w, x, y, z]`.
@@ -321,7 +274,9 @@ pub struct Scorer {
     bounced: bool,
     apex: Option<f64>,
     climbing_max: f64,
-    last: Option<Sample>,
+    /// Time and bodies of the last sample (the finish reads them).
+    last_t: Option<f64>,
+    last: Vec<Pose>,
     // S4
     e0: Option<f64>,
     max_drift: f64,
@@ -373,7 +328,8 @@ impl Scorer {
             bounced: false,
             apex: None,
             climbing_max: f64::NEG_INFINITY,
-            last: None,
+            last_t: None,
+            last: Vec::new(),
             e0: None,
             max_drift: 0.0,
             joint_error: 0.0,
@@ -390,12 +346,12 @@ impl Scorer {
     }
 
     /// Total energy: kinetic (solid spheres) plus gravity's potential.
-    fn energy(&self, s: &Sample) -> f64 {
+    fn energy(&self, bodies: &[Pose]) -> f64 {
         let g = v3(self.scene.sim.gravity);
         self.scene
             .bodies
             .iter()
-            .zip(&s.bodies)
+            .zip(bodies)
             .map(|(b, p)| {
                 let j = 0.4 * b.mass * b.radius * b.radius;
                 0.5 * b.mass * v3(p.v).norm_squared() + 0.5 * j * v3(p.w).norm_squared()
@@ -417,7 +373,7 @@ impl Scorer {
 
     pub fn observe(&mut self, s: &Sample) {
         self.samples += 1;
-        let dt = self.last.as_ref().map_or(s.t, |l| s.t - l.t);
+        let dt = self.last_t.map_or(s.t, |t| s.t - t);
         match self.case {
             CaseId::Rolling | CaseId::SlideToRoll => {
                 let p = &s.bodies[0];
@@ -447,7 +403,7 @@ impl Scorer {
                 }
             }
             CaseId::Chain => {
-                let e = self.energy(s);
+                let e = self.energy(&s.bodies);
                 let e0 = *self.e0.get_or_insert(e);
                 self.max_drift = self.max_drift.max((e - e0).abs());
                 for (a, la, b, lb) in &self.anchors {
@@ -492,20 +448,19 @@ impl Scorer {
                 }
             }
         }
-        self.last = Some(s.clone());
+        self.last_t = Some(s.t);
+        self.last.clear();
+        self.last.extend_from_slice(&s.bodies);
     }
 
     pub fn finish(self) -> Score {
-        let last = self.last.clone().unwrap_or_default();
+        let last = &self.last;
         match self.case {
             CaseId::Rolling => {
                 let th = INCLINE.to_radians();
                 let down = Vector3::new(th.cos(), 0.0, -th.sin());
                 let start = v3(self.scene.bodies[0].position);
-                let d = last
-                    .bodies
-                    .first()
-                    .map_or(0.0, |p| (v3(p.x) - start).dot(&down));
+                let d = last.first().map_or(0.0, |p| (v3(p.x) - start).dot(&down));
                 Score {
                     error: (d - rolling_distance()).abs(),
                     metrics: vec![
@@ -516,7 +471,7 @@ impl Scorer {
                 }
             }
             CaseId::SlideToRoll => {
-                let speed = last.bodies.first().map_or(0.0, |p| v3(p.v).norm());
+                let speed = last.first().map_or(0.0, |p| v3(p.v).norm());
                 let tr = self.roll_time.unwrap_or(f64::INFINITY);
                 Score {
                     error: (speed - slide_final_speed()).abs(),
@@ -542,7 +497,7 @@ impl Scorer {
                     .iter()
                     .map(|b| b.mass * G * v3(b.position).norm())
                     .sum();
-                let e_end = self.energy(&last);
+                let e_end = self.energy(last);
                 Score {
                     error: (e_end - self.e0.unwrap_or(e_end)).abs() / scale,
                     metrics: vec![

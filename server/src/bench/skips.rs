@@ -64,14 +64,10 @@ pub fn run(model: Model, steps: u64) -> Run {
 
 /// Largest position difference between two runs over their common steps.
 pub fn distance(a: &Run, b: &Run) -> f64 {
-    let mut d: f64 = 0.0;
-    for (xa, xb) in a.positions.iter().zip(&b.positions) {
-        for (p, q) in xa.iter().zip(xb) {
-            let e = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
-            d = d.max(e);
-        }
-    }
-    d
+    a.positions
+        .iter()
+        .zip(&b.positions)
+        .fold(0.0, |d, (xa, xb)| d.max(super::farthest(xa, xb)))
 }
 
 /// Largest difference of the new velocities (m/s, rad/s) over a run with
@@ -126,6 +122,20 @@ pub struct Measured {
     pub per_step: PerStep,
 }
 
+impl Measured {
+    /// Runs `on` and `off` for `steps` steps, and `off` from each state of
+    /// `on`.
+    fn of(skip: &'static str, scene: &'static str, on: Model, off: Model, steps: u64) -> Measured {
+        Measured {
+            skip,
+            scene,
+            per_step: per_step_difference(on.clone(), off.clone(), steps),
+            on: run(on, steps),
+            off: run(off, steps),
+        }
+    }
+}
+
 fn model(scene: &Scene, solver: SolverChoice) -> Model {
     let mut s = scene.clone();
     s.sim.solver = solver;
@@ -143,35 +153,35 @@ pub fn measure(steps: u64) -> Result<Vec<Measured>, String> {
     let on = model(&reference, SolverChoice::Lemke);
     let mut off = on.clone();
     off.params.full = true;
-    out.push(Measured {
-        skip: "pruning (contacts that cannot close)",
-        scene: "reference, Lemke",
-        per_step: per_step_difference(on.clone(), off.clone(), steps),
-        on: run(on, steps),
-        off: run(off, steps),
-    });
+    out.push(Measured::of(
+        "pruning (contacts that cannot close)",
+        "reference, Lemke",
+        on,
+        off,
+        steps,
+    ));
 
     let on = model(&frictionless, SolverChoice::Lemke);
     let mut off = on.clone();
     off.params.skips.frictionless_rows = false;
-    out.push(Measured {
-        skip: "no friction rows where mu = 0",
-        scene: "frictionless, Lemke",
-        per_step: per_step_difference(on.clone(), off.clone(), steps),
-        on: run(on, steps),
-        off: run(off, steps),
-    });
+    out.push(Measured::of(
+        "no friction rows where mu = 0",
+        "frictionless, Lemke",
+        on,
+        off,
+        steps,
+    ));
 
     let on = model(&reference, SolverChoice::Pgs);
     let mut off = on.clone();
     off.params.skips.warm_start = false;
-    out.push(Measured {
-        skip: "PGS warm start",
-        scene: "reference, PGS",
-        per_step: per_step_difference(on.clone(), off.clone(), steps),
-        on: run(on, steps),
-        off: run(off, steps),
-    });
+    out.push(Measured::of(
+        "PGS warm start",
+        "reference, PGS",
+        on,
+        off,
+        steps,
+    ));
     Ok(out)
 }
 

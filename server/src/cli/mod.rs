@@ -283,20 +283,7 @@ fn bench_accuracy(args: &AccuracyArgs) -> ExitCode {
     }
     let machine = accuracy::machine();
     println!("# bench accuracy on {machine}");
-    let result = accuracy::sweep(&sweep, |p| {
-        println!(
-            "{:4} {:28} h={:<7e} {:>10.3e} s/sim-s  error {:.3e}{}",
-            p.case.key(),
-            p.setting,
-            p.h,
-            p.wall_per_sim_s,
-            p.score.error,
-            p.failure
-                .as_deref()
-                .map(|f| format!("  FAILED {f}"))
-                .unwrap_or_default()
-        )
-    });
+    let result = accuracy::sweep(&sweep, |p| println!("{}", p.line()));
     let (points, notes) = match result {
         Ok(r) => r,
         Err(e) => {
@@ -307,24 +294,8 @@ fn bench_accuracy(args: &AccuracyArgs) -> ExitCode {
     for n in &notes {
         println!("{n}");
     }
-    if let Err(e) = std::fs::create_dir_all(&args.out) {
-        eprintln!("error: cannot create {}: {e}", args.out.display());
-        return ExitCode::from(EXIT_FAILED);
-    }
-    let csv = args.out.join("accuracy.csv");
-    if let Err(e) = std::fs::write(&csv, accuracy::csv(&points)) {
-        eprintln!("error: cannot write {}: {e}", csv.display());
-        return ExitCode::from(EXIT_FAILED);
-    }
-    let notes_file = args.out.join("accuracy.md");
-    let text = accuracy::summary(&points, &machine, &notes);
-    if let Err(e) = std::fs::write(&notes_file, text) {
-        eprintln!("error: cannot write {}: {e}", notes_file.display());
-        return ExitCode::from(EXIT_FAILED);
-    }
-    match accuracy::diagrams(&points, &args.out, &machine) {
+    match accuracy::write(&points, &notes, &args.out, &machine) {
         Ok(files) => {
-            println!("wrote {}", csv.display());
             for f in files {
                 println!("wrote {}", f.display());
             }
