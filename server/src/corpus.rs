@@ -247,8 +247,8 @@ pub fn read_mlcp(text: &str) -> Result<MlcpProblem, FormatError> {
 /// How a mixed LCP ended.
 #[derive(Debug, Clone, PartialEq)]
 pub enum MlcpOutcome {
-    /// Solved: `u`, `v`, the Lemke pivots and the residual (see
-    /// [`solve_mlcp`]).
+    /// Solved: `u`, `v`, the Lemke pivots (PGS sweeps with PGS) and the
+    /// residual (see [`solve_mlcp`]).
     Solved {
         u: Vec<f64>,
         v: Vec<f64>,
@@ -265,6 +265,80 @@ pub enum MlcpOutcome {
         error: crate::engine::solver::LemkeError,
         pivot_ratio: f64,
     },
+    /// PGS reached its iteration cap on the reduced LCP, at `residual`.
+    NotConverged {
+        iterations: usize,
+        residual: f64,
+        pivot_ratio: f64,
+    },
+}
+
+/// The solver of a corpus LCP (or of a mixed LCP's reduced LCP).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LcpSolver {
+    /// [`Lemke::solve_plain`](crate::engine::solver::Lemke::solve_plain).
+    Lemke,
+    /// [`pgs::solve_dense`](crate::engine::solver::pgs::solve_dense).
+    Pgs(crate::engine::solver::PgsParams),
+}
+
+/// How an LCP solve by either solver ended: `Ok` with `(work, residual)`
+/// (pivots or sweeps), or the failure in the words of `lcp --json`.
+pub fn solve_lcp(
+    solver: LcpSolver,
+    lcp: &crate::engine::solver::Lcp,
+    z: &mut [f64],
+) -> Result<(usize, f64), LcpFailure> {
+    use crate::engine::solver::{pgs, Lemke, LemkeError};
+    match solver {
+        LcpSolver::Lemke => match Lemke::new().solve_plain(lcp, z) {
+            Ok(info) => Ok((info.work, info.residual)),
+            Err(e) => {
+                let (status, work) = match e {
+                    LemkeError::RayTermination { pivots, .. } => ("ray_termination", pivots),
+                    LemkeError::PivotLimit { pivots, .. } => ("pivot_limit", pivots),
+                    LemkeError::NumericalBreakdown { pivots, .. } => ("not_converged", pivots),
+                };
+                let residual = match e {
+                    LemkeError::NumericalBreakdown { residual, .. } => Some(residual),
+                    _ => None,
+                };
+                Err(LcpFailure {
+                    status,
+                    work,
+                    residual,
+                    message: e.to_string(),
+                })
+            }
+        },
+        LcpSolver::Pgs(params) => {
+            let info = pgs::solve_dense(lcp, &params, z);
+            if info.converged {
+                Ok((info.iterations, info.residual))
+            } else {
+                Err(LcpFailure {
+                    status: "not_converged",
+                    work: info.iterations,
+                    residual: Some(info.residual),
+                    message: format!(
+                        "no convergence: residual {:.3e} after {} sweeps (tolerance {:.1e})",
+                        info.residual, info.iterations, params.tolerance
+                    ),
+                })
+            }
+        }
+    }
+}
+
+/// A failed LCP solve: `status` as `lcp --json` prints it (`ray_termination`,
+/// `pivot_limit`, `not_converged`), pivots or sweeps done, the residual
+/// reached where there is one (not on a ray), and the message.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LcpFailure {
+    pub status: &'static str,
+    pub work: usize,
+    pub residual: Option<f64>,
+    pub message: String,
 }
 
 /// Largest accepted ratio of LU pivots of the equality block: beyond it the
@@ -277,7 +351,12 @@ pub const MAX_PIVOT_RATIO: f64 = 1e12;
 /// ||a||)` and the natural-map residual of the complementarity part
 /// relative to `max(1, ||b||)`.
 pub fn solve_mlcp(p: &MlcpProblem) -> MlcpOutcome {
-    use crate::engine::solver::{Lcp, Lemke};
+    solve_mlcp_with(p, LcpSolver::Lemke)
+}
+
+/// [`solve_mlcp`] with the reduced LCP solved by `solver`.
+pub fn solve_mlcp_with(p: &MlcpProblem, solver: LcpSolver) -> MlcpOutcome {
+    use crate::engine::solver::{pgs, Lcp, Lemke};
     use faer::Mat;
     let (n, m) = (p.a.len(), p.b.len());
     let mut pivot_ratio = 1.0;
@@ -318,16 +397,27 @@ pub fn solve_mlcp(p: &MlcpProblem) -> MlcpOutcome {
         q[i] = p.b[i] - (0..n).map(|k| p.d_mat.at(i, k) * x_vec[k]).sum::<f64>();
     }
     let mut v = vec![0.0; m];
-    let info = match Lemke::new().solve_plain(
-        &Lcp {
-            n: m,
-            m: &mm,
-            q: &q,
+    let lcp = Lcp {
+        n: m,
+        m: &mm,
+        q: &q,
+    };
+    let work = match solver {
+        LcpSolver::Lemke => match Lemke::new().solve_plain(&lcp, &mut v) {
+            Ok(info) => info.work,
+            Err(error) => return MlcpOutcome::Lemke { error, pivot_ratio },
         },
-        &mut v,
-    ) {
-        Ok(info) => info,
-        Err(error) => return MlcpOutcome::Lemke { error, pivot_ratio },
+        LcpSolver::Pgs(params) => {
+            let info = pgs::solve_dense(&lcp, &params, &mut v);
+            if !info.converged {
+                return MlcpOutcome::NotConverged {
+                    iterations: info.iterations,
+                    residual: info.residual,
+                    pivot_ratio,
+                };
+            }
+            info.iterations
+        }
     };
     let u: Vec<f64> = (0..n)
         .map(|i| -(x_vec[i] + (0..m).map(|j| x_mat[i * m + j] * v[j]).sum::<f64>()))
@@ -353,7 +443,7 @@ pub fn solve_mlcp(p: &MlcpProblem) -> MlcpOutcome {
     MlcpOutcome::Solved {
         u,
         v,
-        pivots: info.work,
+        pivots: work,
         residual,
         pivot_ratio,
     }

@@ -1,8 +1,10 @@
 //! The Siconos LCP corpus (`../shared/data/lcp/siconos`, read in place):
 //! every problem gives the outcome of the data README's table.
 
-use cosim_server::corpus::{read_lcp, LcpProblem};
-use cosim_server::engine::solver::{relative_residual, Lcp, Lemke, LemkeError, SolveInfo};
+use cosim_server::corpus::{read_lcp, solve_lcp, LcpProblem, LcpSolver};
+use cosim_server::engine::solver::{
+    relative_residual, Lcp, Lemke, LemkeError, PgsParams, SolveInfo,
+};
 use std::path::PathBuf;
 
 fn data(name: &str) -> PathBuf {
@@ -115,4 +117,98 @@ fn lcp_command_prints_the_outcome_as_json() {
             assert_eq!(v["z"].as_array().map(Vec::len), Some(6));
         }
     }
+}
+
+/// PGS on the same corpus: it converges where `M` is symmetric positive
+/// semi-definite with a positive diagonal (coordinate descent on a convex
+/// quadratic) and says `not_converged` with its residual elsewhere; it never
+/// calls an unverified answer solved. Tolerance 1e-10, cap 20,000 sweeps.
+#[test]
+fn pgs_solves_the_symmetric_psd_problems_and_reports_the_rest() {
+    let params = PgsParams {
+        tolerance: 1e-10,
+        max_iterations: 20_000,
+        ..PgsParams::default()
+    };
+    let dir = data("");
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names.len(), 20);
+    let mut solved = Vec::new();
+    for name in &names {
+        let p = load(name);
+        let n = p.q.len();
+        let lcp = Lcp {
+            n,
+            m: &p.m.data,
+            q: &p.q,
+        };
+        let symmetric_pos_diag = (0..n).all(|i| {
+            p.m.data[i * n + i] > 0.0
+                && (0..n).all(|j| {
+                    (p.m.data[i * n + j] - p.m.data[j * n + i]).abs()
+                        <= 1e-12 * p.m.data[i * n + j].abs().max(1.0)
+                })
+        });
+        let mut z = vec![0.0; n];
+        match solve_lcp(LcpSolver::Pgs(params), &lcp, &mut z) {
+            Ok((sweeps, residual)) => {
+                eprintln!("{name}: pgs solved in {sweeps} sweeps, residual {residual:.1e}");
+                assert!(relative_residual(&lcp, &z) <= 1e-10, "{name}");
+                assert!(z.iter().all(|x| x.is_finite() && *x >= 0.0), "{name}");
+                solved.push(name.as_str());
+            }
+            Err(f) => {
+                eprintln!("{name}: pgs {} ({})", f.status, f.message);
+                assert_eq!(f.status, "not_converged", "{name}");
+                assert_eq!(f.work, 20_000, "{name}");
+                assert!(f.residual.is_some_and(|r| r > 1e-10), "{name}");
+                // Where PGS is guaranteed to converge, it must.
+                assert!(
+                    !symmetric_pos_diag,
+                    "{name}: symmetric, positive diagonal, not solved"
+                );
+            }
+        }
+    }
+    // The unsolvable one stays unsolved by PGS too.
+    assert!(!solved.contains(&"lcp_Pang_isolated_sol_perturbed.dat"));
+    assert!(solved.len() >= 10, "{solved:?}");
+}
+
+#[test]
+fn lcp_command_takes_the_pgs_solver() {
+    let bin = env!("CARGO_BIN_EXE_cosim-server");
+    for (name, status, code) in [
+        ("lcp_mmc.dat", "solved", 0),
+        ("lcp_tobenna.dat", "not_converged", 1),
+    ] {
+        let out = std::process::Command::new(bin)
+            .args([
+                "lcp",
+                "--solver",
+                "pgs",
+                "--max-iterations",
+                "5000",
+                "--json",
+            ])
+            .arg(data(name))
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(code), "{name}");
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+        assert_eq!(v["status"], status, "{name}");
+        assert_eq!(v["solver"], "pgs");
+        assert!(v["iterations"].is_u64() && v["residual"].is_f64(), "{v}");
+    }
+    let out = std::process::Command::new(bin)
+        .args(["lcp", "--solver", "newton"])
+        .arg(data("lcp_mmc.dat"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--solver"));
 }

@@ -1,18 +1,10 @@
 //! `cosim-server lcp FILE`: solve a Siconos LCP or mixed LCP file.
 
 use super::{LcpArgs, EXIT_BAD_INPUT, EXIT_FAILED};
-use crate::corpus::{read_lcp, read_mlcp, solve_mlcp, MlcpOutcome};
-use crate::engine::solver::{Lcp, Lemke, LemkeError};
+use crate::corpus::{read_lcp, read_mlcp, solve_lcp, solve_mlcp_with, LcpSolver, MlcpOutcome};
+use crate::engine::solver::{Lcp, PgsParams};
 use serde_json::json;
 use std::process::ExitCode;
-
-fn status(e: &LemkeError) -> &'static str {
-    match e {
-        LemkeError::RayTermination { .. } => "ray_termination",
-        LemkeError::PivotLimit { .. } => "pivot_limit",
-        LemkeError::NumericalBreakdown { .. } => "not_converged",
-    }
-}
 
 pub fn lcp(args: &LcpArgs) -> ExitCode {
     let file = args.file.display().to_string();
@@ -23,8 +15,24 @@ pub fn lcp(args: &LcpArgs) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
-    // An MLCP file starts with its two storage flags; try the LCP form first
-    // unless the name says otherwise.
+    let (solver, name, work) = match args.solver.as_str() {
+        "lemke" => (LcpSolver::Lemke, "lemke", "pivots"),
+        "pgs" => (
+            LcpSolver::Pgs(PgsParams {
+                tolerance: args.tolerance,
+                max_iterations: args.max_iterations,
+                ..PgsParams::default()
+            }),
+            "pgs",
+            "iterations",
+        ),
+        other => {
+            eprintln!("error: --solver: unknown solver {other:?} (expected lemke or pgs)");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    // An MLCP file starts with its two storage flags; the name tells which
+    // reader applies.
     let mixed = file.ends_with("_mlcp.dat");
     let report = if mixed {
         let p = match read_mlcp(&text) {
@@ -34,7 +42,7 @@ pub fn lcp(args: &LcpArgs) -> ExitCode {
                 return ExitCode::from(EXIT_BAD_INPUT);
             }
         };
-        match solve_mlcp(&p) {
+        match solve_mlcp_with(&p, solver) {
             MlcpOutcome::Solved {
                 u,
                 v,
@@ -42,13 +50,26 @@ pub fn lcp(args: &LcpArgs) -> ExitCode {
                 residual,
                 ..
             } => {
-                json!({"file": file, "status": "solved", "solver": "lemke", "pivots": pivots, "residual": residual, "u": u, "z": v})
+                json!({"file": file, "status": "solved", "solver": name, work: pivots, "residual": residual, "u": u, "z": v})
             }
             MlcpOutcome::SingularEquality { ratio } => {
-                json!({"file": file, "status": "singular", "solver": "lemke", "pivot_ratio": if ratio.is_finite() { json!(ratio) } else { json!("inf") }})
+                json!({"file": file, "status": "singular", "solver": name, "pivot_ratio": if ratio.is_finite() { json!(ratio) } else { json!("inf") }})
             }
             MlcpOutcome::Lemke { error, .. } => {
-                json!({"file": file, "status": status(&error), "solver": "lemke", "message": error.to_string()})
+                let status = match error {
+                    crate::engine::solver::LemkeError::RayTermination { .. } => "ray_termination",
+                    crate::engine::solver::LemkeError::PivotLimit { .. } => "pivot_limit",
+                    crate::engine::solver::LemkeError::NumericalBreakdown { .. } => "not_converged",
+                };
+                json!({"file": file, "status": status, "solver": name, "message": error.to_string()})
+            }
+            MlcpOutcome::NotConverged {
+                iterations,
+                residual,
+                ..
+            } => {
+                json!({"file": file, "status": "not_converged", "solver": name, work: iterations, "residual": residual,
+                       "message": format!("no convergence: residual {residual:.3e} after {iterations} sweeps")})
             }
         }
     } else {
@@ -61,24 +82,17 @@ pub fn lcp(args: &LcpArgs) -> ExitCode {
         };
         let n = p.q.len();
         let mut z = vec![0.0; n];
-        match Lemke::new().solve_plain(
-            &Lcp {
-                n,
-                m: &p.m.data,
-                q: &p.q,
-            },
-            &mut z,
-        ) {
-            Ok(info) => {
-                json!({"file": file, "status": "solved", "solver": "lemke", "pivots": info.work, "residual": info.residual, "z": z})
+        let lcp = Lcp {
+            n,
+            m: &p.m.data,
+            q: &p.q,
+        };
+        match solve_lcp(solver, &lcp, &mut z) {
+            Ok((count, residual)) => {
+                json!({"file": file, "status": "solved", "solver": name, work: count, "residual": residual, "z": z})
             }
-            Err(e) => {
-                let pivots = match e {
-                    LemkeError::RayTermination { pivots, .. }
-                    | LemkeError::PivotLimit { pivots, .. }
-                    | LemkeError::NumericalBreakdown { pivots, .. } => pivots,
-                };
-                json!({"file": file, "status": status(&e), "solver": "lemke", "pivots": pivots, "message": e.to_string()})
+            Err(f) => {
+                json!({"file": file, "status": f.status, "solver": name, work: f.work, "residual": f.residual, "message": f.message})
             }
         }
     };
@@ -87,7 +101,7 @@ pub fn lcp(args: &LcpArgs) -> ExitCode {
         println!("{report}");
     } else {
         println!("{file}: {}", report["status"].as_str().unwrap_or("?"));
-        for key in ["pivots", "residual", "pivot_ratio", "message"] {
+        for key in ["pivots", "iterations", "residual", "pivot_ratio", "message"] {
             if let Some(v) = report.get(key) {
                 println!("  {key}: {v}");
             }

@@ -139,9 +139,20 @@ pub struct LcpArgs {
     /// The problem file (Siconos format, see ../shared/data/README.md).
     pub file: PathBuf,
     /// Print one JSON object: status (solved, ray_termination, pivot_limit,
-    /// singular, not_converged), solver, pivots, residual, z.
+    /// singular, not_converged), solver, pivots (Lemke) or iterations (PGS),
+    /// residual, z.
     #[arg(long)]
     pub json: bool,
+    /// lemke (complementary pivoting) or pgs (projected Gauss-Seidel, which
+    /// converges for symmetric positive semi-definite matrices).
+    #[arg(long, default_value = "lemke")]
+    pub solver: String,
+    /// PGS: stop at this relative natural-map residual.
+    #[arg(long, default_value_t = 1e-10)]
+    pub tolerance: f64,
+    /// PGS: sweep cap.
+    #[arg(long, default_value_t = 100_000)]
+    pub max_iterations: usize,
 }
 
 #[derive(clap::Args, Debug, Clone)]

@@ -412,6 +412,19 @@ impl Engine {
                             for (i, &ci) in m.lcp_contacts.iter().enumerate() {
                                 m.lambda[m.nb + i] = self.state.warm_normal[ws.contacts[ci].id];
                             }
+                            // Friction: last step's world impulse on this
+                            // step's tangent plane, inside this step's cone.
+                            for (f, &i) in m.friction_of.iter().enumerate() {
+                                let c = &ws.contacts[m.lcp_contacts[i]];
+                                let w = self.state.warm_friction[c.id];
+                                let base = m.nb + m.nc + f * m.nd;
+                                solver::pgs::warm_friction(
+                                    [w.dot(&c.t1), w.dot(&c.t2)],
+                                    m.mu[f] * m.lambda[m.nb + i],
+                                    p.friction_cone == cosim_shared::FrictionCone::Circular,
+                                    &mut m.lambda[base..base + m.nd],
+                                );
+                            }
                         }
                         let problem = PgsProblem {
                             rows: &m.rows,
@@ -509,6 +522,7 @@ impl Engine {
         ws.impulses.clear();
         self.state.warm_joint.copy_from_slice(&m.p_b);
         self.state.warm_normal.fill(0.0);
+        self.state.warm_friction.fill(Vector3::zeros());
         for (i, &ci) in m.lcp_contacts.iter().enumerate() {
             self.state.warm_normal[ws.contacts[ci].id] = m.z[i];
         }
@@ -548,6 +562,7 @@ impl Engine {
             if let Some((f, _)) = friction.next_if(|(_, &row)| row == i) {
                 let base = m.nc + f * nd;
                 let p: Vector3<f64> = (0..nd).map(|j| c.direction(j, nd) * m.z[base + j]).sum();
+                self.state.warm_friction[c.id] = p;
                 if p != Vector3::zeros() {
                     ws.impulses.push(record(ImpulseKind::Friction, p));
                 }

@@ -23,8 +23,11 @@ pub struct State {
     /// Warm start of the iterative solver, part of the state so that a
     /// snapshot is complete and a restored PGS run repeats its bits: the
     /// last step's normal impulse of every potential contact (by canonical
-    /// index) and joint impulses (3 per joint).
+    /// index), its friction impulse as a world vector (the tangent basis
+    /// turns with the slip from step to step, the world vector does not),
+    /// and joint impulses (3 per joint).
     pub warm_normal: Vec<f64>,
+    pub warm_friction: Vec<Vector3<f64>>,
     pub warm_joint: Vec<f64>,
 }
 
@@ -44,6 +47,7 @@ impl State {
                 })
                 .collect(),
             warm_normal: vec![0.0; model.potential_contacts()],
+            warm_friction: vec![Vector3::zeros(); model.potential_contacts()],
             warm_joint: vec![0.0; 3 * model.joints.len()],
         }
     }

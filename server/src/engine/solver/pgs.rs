@@ -208,6 +208,62 @@ fn decompose(p: [f64; 2], nd: usize, out: &mut [f64]) {
     out[(j + 1) % nd] += b.max(0.0);
 }
 
+/// A warm start for one friction block: the tangential impulse `pt` (in
+/// this step's `t1, t2` coordinates) clipped to the cone at the normal
+/// impulse's warm start (`cap = mu p_n`) and written on the block's `n_d`
+/// directions, as the iteration keeps it.
+pub fn warm_friction(pt: [f64; 2], cap: f64, circular: bool, out: &mut [f64]) {
+    let nd = out.len();
+    let p = if circular {
+        project_disc(pt, cap)
+    } else {
+        project_polygon(pt, cap, nd)
+    };
+    decompose(p, nd, out);
+}
+
+/// Projected Gauss-Seidel on a dense LCP `0 <= M z + q _|_ z >= 0` (the
+/// solver corpus' problems, which have no bodies to sweep over):
+/// `z_i <- max(0, z_i - omega w_i / M_ii)` from `z = 0`, stopped by the
+/// shared [`relative_residual`](super::relative_residual) at
+/// `params.tolerance`, or the cap. It converges for symmetric positive
+/// semi-definite `M` with a positive diagonal (then it is a coordinate
+/// descent on `z^T M z / 2 + q^T z`); on other classes it may not, and says
+/// so. Rows with `M_ii <= 0` cannot be stepped and are left at zero.
+pub fn solve_dense(lcp: &Lcp, params: &PgsParams, z: &mut [f64]) -> PgsInfo {
+    let n = lcp.n;
+    z[..n].fill(0.0);
+    let mut info = PgsInfo {
+        iterations: 0,
+        residual: super::relative_residual(lcp, &z[..n]),
+        converged: false,
+    };
+    if info.residual <= params.tolerance {
+        info.converged = true;
+        return info;
+    }
+    for it in 1..=params.max_iterations.max(1) {
+        for i in 0..n {
+            let row = &lcp.m[i * n..(i + 1) * n];
+            let d = row[i];
+            if d <= 0.0 {
+                continue;
+            }
+            let w = lcp.q[i] + row.iter().zip(z.iter()).map(|(a, b)| a * b).sum::<f64>();
+            z[i] = (z[i] - params.relaxation * w / d).max(0.0);
+        }
+        if it % CHECK_EVERY == 0 || it == params.max_iterations {
+            info.iterations = it;
+            info.residual = super::relative_residual(lcp, &z[..n]);
+            if info.residual <= params.tolerance {
+                info.converged = true;
+                return info;
+            }
+        }
+    }
+    info
+}
+
 #[derive(Debug, Default, Clone)]
 pub struct Pgs {
     diag: Vec<f64>,
@@ -412,6 +468,29 @@ impl Pgs {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn dense_pgs_solves_a_spd_lcp_and_reports_a_cap() {
+        // M = [[2,1],[1,2]], q = [-5,-6]: z = [4/3, 7/3].
+        let (m, q) = ([2.0, 1.0, 1.0, 2.0], [-5.0, -6.0]);
+        let lcp = Lcp { n: 2, m: &m, q: &q };
+        let mut z = [0.0; 2];
+        let info = solve_dense(&lcp, &PgsParams::default(), &mut z);
+        assert!(info.converged && info.residual <= 1e-10, "{info:?}");
+        assert!((z[0] - 4.0 / 3.0).abs() < 1e-9 && (z[1] - 7.0 / 3.0).abs() < 1e-9);
+        // A zero diagonal cannot be stepped: the cap is reached and said.
+        let (m, q) = ([0.0, 1.0, -1.0, 0.0], [-1.0, 1.0]);
+        let lcp = Lcp { n: 2, m: &m, q: &q };
+        let params = PgsParams {
+            max_iterations: 40,
+            ..PgsParams::default()
+        };
+        let info = solve_dense(&lcp, &params, &mut z);
+        assert!(
+            !info.converged && info.iterations == 40 && info.residual > 0.1,
+            "{info:?}"
+        );
+    }
 
     #[test]
     fn polygon_projection_and_decomposition() {
