@@ -352,7 +352,9 @@ impl StateReader {
             .sub
             .receive()
             .map_err(|e| ipc("cannot receive the state")(&e))?
-            .map(|s| *s.payload()))
+            // The entries in use only: the rest of the 8.5 KB stays in the
+            // server's cache (StateFrame::write_used says why).
+            .map(|s| s.payload().used_copy()))
     }
 
     /// The newest frame in the buffer, if any (older ones are dropped).
@@ -444,6 +446,8 @@ pub struct Controller {
     last: Option<StateFrame>,
     sequence: u64,
     info: ControlResponse,
+    /// What earlier inputs left in the input publisher's samples.
+    written: Written,
 }
 
 impl Controller {
@@ -483,6 +487,7 @@ impl Controller {
             last: None,
             sequence: 0,
             info,
+            written: Written::default(),
         })
     }
 
@@ -535,13 +540,27 @@ impl Controller {
     }
 
     /// Sends a frame as it is (tests use it to send bad inputs).
-    pub fn send_raw(&self, input: &InputFrame) -> Result<(), ClientError> {
-        let sample = self
+    pub fn send_raw(&mut self, input: &InputFrame) -> Result<(), ClientError> {
+        let mut sample = self
             .input
             .loan_uninit()
             .map_err(|e| ipc("cannot loan an input sample")(&e))?;
+        // SAFETY: the sample's bytes are initialised: the publisher's data
+        // segment is shared memory the OS hands out zero-filled (POSIX
+        // ftruncate), and since then only input frames of this publisher
+        // were written into it. InputFrame is #[repr(C)] plain numbers
+        // (u32, u64, f64, explicit padding: the layout test in wire.rs),
+        // valid for every bit pattern. `write_used` writes every entry that
+        // differs from `input` (the marks in `self.written` cover what
+        // earlier frames left), so the sample holds exactly `input`.
+        let sample = unsafe {
+            sample
+                .payload_mut()
+                .assume_init_mut()
+                .write_used(input, &mut self.written);
+            sample.assume_init()
+        };
         sample
-            .write_payload(*input)
             .send()
             .map_err(|e| ipc("cannot send the input")(&e))?;
         // A spinning server needs no wake-up.

@@ -231,6 +231,103 @@ impl StateFrame {
     }
 }
 
+/// High-water marks of the entries written into the frames of one pool of
+/// samples (one publisher's, or one local frame): see
+/// [`StateFrame::write_used`].
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct Written {
+    pub bodies: usize,
+    pub joints: usize,
+    pub contacts: usize,
+}
+
+/// `dst[..n] = src[..n]`, and `dst[n..mark]` back to the default; then
+/// raises `mark` to `n`.
+fn write_prefix<T: Copy + Default>(dst: &mut [T], src: &[T], n: usize, mark: &mut usize) {
+    let len = dst.len();
+    let n = n.min(len);
+    dst[..n].copy_from_slice(&src[..n]);
+    if *mark > n {
+        dst[n..(*mark).min(len)].fill(T::default());
+    }
+    *mark = (*mark).max(n);
+}
+
+impl StateFrame {
+    /// Makes `self` equal to `src` where `src`'s entries past its counts
+    /// are zero (every frame this crate builds), writing only the header,
+    /// the entries in use and the stale entries `written` says earlier
+    /// frames left (its marks cover every frame ever written into this
+    /// memory, which started zeroed). Why: a full copy is 8.5 KB, 133 cache
+    /// lines; a reader on another core that copied the last frame holds
+    /// them all, and writing them back costs a cross-core transfer each
+    /// (measured: 5.3 us of a 7 us publish on this machine).
+    pub fn write_used(&mut self, src: &StateFrame, written: &mut Written) {
+        // Exhaustive: a field added to the frame must be added here.
+        let &StateFrame {
+            version,
+            status,
+            step,
+            sim_time,
+            sequence,
+            model_hash,
+            body_count,
+            joint_count,
+            contact_count,
+            controller_count,
+            solver_status,
+            lcp_size,
+            residual,
+            dt,
+            bodies: _,
+            joint_impulses: _,
+            contacts: _,
+            controllers,
+        } = src;
+        self.version = version;
+        self.status = status;
+        self.step = step;
+        self.sim_time = sim_time;
+        self.sequence = sequence;
+        self.model_hash = model_hash;
+        self.body_count = body_count;
+        self.joint_count = joint_count;
+        self.contact_count = contact_count;
+        self.controller_count = controller_count;
+        self.solver_status = solver_status;
+        self.lcp_size = lcp_size;
+        self.residual = residual;
+        self.dt = dt;
+        self.controllers = controllers;
+        write_prefix(
+            &mut self.bodies,
+            &src.bodies,
+            body_count as usize,
+            &mut written.bodies,
+        );
+        write_prefix(
+            &mut self.joint_impulses,
+            &src.joint_impulses,
+            joint_count as usize,
+            &mut written.joints,
+        );
+        write_prefix(
+            &mut self.contacts,
+            &src.contacts,
+            contact_count as usize,
+            &mut written.contacts,
+        );
+    }
+
+    /// A local copy of the entries in use (the rest default): what a
+    /// reader needs, without pulling the whole frame across cores.
+    pub fn used_copy(&self) -> StateFrame {
+        let mut f = StateFrame::default();
+        f.write_used(self, &mut Written::default());
+        f
+    }
+}
+
 /// `StateFrame::solver_status`.
 pub const SOLVER_OK: u32 = 0;
 pub const SOLVER_RAY_TERMINATION: u32 = 1;
@@ -301,6 +398,46 @@ impl Default for InputFrame {
 }
 
 impl InputFrame {
+    /// As [`StateFrame::write_used`]: the header and the torques and
+    /// impulses in use (`written.joints` and `written.bodies` mark them).
+    pub fn write_used(&mut self, src: &InputFrame, written: &mut Written) {
+        let &InputFrame {
+            version,
+            controller_id,
+            step,
+            sequence,
+            torque_count,
+            impulse_count,
+            torques: _,
+            impulses: _,
+        } = src;
+        self.version = version;
+        self.controller_id = controller_id;
+        self.step = step;
+        self.sequence = sequence;
+        self.torque_count = torque_count;
+        self.impulse_count = impulse_count;
+        write_prefix(
+            &mut self.torques,
+            &src.torques,
+            torque_count as usize,
+            &mut written.joints,
+        );
+        write_prefix(
+            &mut self.impulses,
+            &src.impulses,
+            impulse_count as usize,
+            &mut written.bodies,
+        );
+    }
+
+    /// A local copy of the entries in use (the rest default).
+    pub fn used_copy(&self) -> InputFrame {
+        let mut f = InputFrame::default();
+        f.write_used(self, &mut Written::default());
+        f
+    }
+
     /// Appends a joint torque; false when the frame is full.
     pub fn push_torque(&mut self, joint: u32, torque: [f64; 3]) -> bool {
         let i = self.torque_count as usize;
@@ -500,6 +637,70 @@ mod tests {
     use core::mem::{align_of, size_of};
 
     // The sizes docs/protocol.md states: a change here is a protocol change.
+    /// A frame written entry by entry into reused memory equals its source,
+    /// whatever the counts of the frames written there before.
+    #[test]
+    fn writing_the_used_entries_equals_a_full_copy() {
+        let mut slots = [StateFrame::default(), StateFrame::default()];
+        let mut inputs = [InputFrame::default(), InputFrame::default()];
+        let (mut w, mut wi) = (Written::default(), Written::default());
+        let mut x = 1.0f64;
+        for (k, &(nb, nj, nc)) in [
+            (2, 2, 5),
+            (3, 1, 0),
+            (2, 2, 64),
+            (1, 0, 70),
+            (2, 2, 3),
+            (0, 0, 0),
+        ]
+        .iter()
+        .enumerate()
+        {
+            let mut src = StateFrame {
+                step: k as u64,
+                body_count: nb,
+                joint_count: nj,
+                contact_count: nc,
+                residual: x,
+                ..StateFrame::default()
+            };
+            for b in &mut src.bodies[..nb as usize] {
+                x += 1.0;
+                b.position = [x, -x, 0.5 * x];
+            }
+            for j in &mut src.joint_impulses[..nj as usize] {
+                x += 1.0;
+                *j = [x; 3];
+            }
+            for c in &mut src.contacts[..(nc as usize).min(MAX_CONTACTS)] {
+                x += 1.0;
+                c.id = x as u32;
+                c.normal = [0.0, 0.0, x];
+            }
+            src.controllers[k % MAX_CONTROLLERS].id = k as u32 + 1;
+            let dst = &mut slots[k % 2];
+            dst.write_used(&src, &mut w);
+            assert_eq!(*dst, src, "frame {k}");
+            assert_eq!(src.used_copy(), src);
+
+            let mut input = InputFrame {
+                step: k as u64,
+                ..InputFrame::default()
+            };
+            for i in 0..nj {
+                input.push_torque(i, [x, 0.0, -x]);
+            }
+            for i in 0..nc.min(MAX_BODIES as u32) {
+                input.push_impulse(i, [x; 3], [-x; 3]);
+            }
+            let dst = &mut inputs[k % 2];
+            dst.write_used(&input, &mut wi);
+            assert_eq!(*dst, input, "input {k}");
+            assert_eq!(input.used_copy(), input);
+        }
+        assert_eq!(w.contacts, MAX_CONTACTS);
+    }
+
     #[test]
     fn layouts_match_the_protocol_document() {
         assert_eq!(size_of::<BodyFrame>(), 104);

@@ -70,6 +70,10 @@ pub enum BenchWhat {
         /// Steps per lockstep measurement.
         #[arg(long, default_value_t = 20_000)]
         steps: u64,
+        /// Only the spinning rows with one controller, the limit and the
+        /// TCP baseline (for working on the loop).
+        #[arg(long)]
+        quick: bool,
         /// Also write the table to this file.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -229,10 +233,10 @@ pub fn main() -> ExitCode {
         Command::Replay(args) => serve::replay(&args),
         Command::PdController(args) => serve::pd_controller(&args),
         Command::Bench {
-            what: BenchWhat::Ipc { steps, out },
+            what: BenchWhat::Ipc { steps, quick, out },
         } => print_table(
             "bench ipc",
-            crate::serve::bench::run(steps).map_err(|e| e.to_string()),
+            crate::serve::bench::run(steps, quick).map_err(|e| e.to_string()),
             out.as_deref(),
         ),
         Command::Bench {

@@ -190,6 +190,9 @@ struct Lockstep {
     /// Wall time per step minus the mean compute (prepare + finish): what
     /// lockstep adds to a step.
     overhead_us: f64,
+    /// Means per step (us): boundary, prepare, wait, finish, around the
+    /// step, publish.
+    phases: [f64; 6],
 }
 
 fn lockstep(
@@ -233,12 +236,23 @@ fn lockstep(
     if let Some(role) = sidecar {
         peers.push(peer(&[role, "--name", &name, "--wait", "block"])?);
     }
-    let (c, _, wall) = server.join().map_err(|_| "the server thread panicked")??;
+    let (c, _, _) = server.join().map_err(|_| "the server thread panicked")??;
+    // From the first step: the controllers' start-up is not lockstep.
+    let wall = c.stepping_seconds;
     drop(peers);
     let nan = f64::NAN;
     let compute_mean_us = c.step_compute.mean().unwrap_or(nan);
     let prepare_mean = c.prepare.mean().unwrap_or(nan);
+    let m = |h: &super::stats::Histogram| h.mean().unwrap_or(nan);
     Ok(Lockstep {
+        phases: [
+            m(&c.phases.boundary),
+            prepare_mean,
+            m(&c.phases.wait),
+            compute_mean_us,
+            m(&c.phases.around_step),
+            m(&c.phases.publish),
+        ],
         overhead_us: wall / c.steps.max(1) as f64 * 1e6 - compute_mean_us - prepare_mean,
         compute_mean_us,
         steps_per_s: c.steps as f64 / wall,
@@ -352,7 +366,7 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
 }
 
 /// Runs every measurement and prints the table (Markdown).
-pub fn run(steps: u64) -> Result<String, BoxError> {
+pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
     let mut out = String::new();
     let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
     out.push_str(&format!(
@@ -360,6 +374,9 @@ pub fn run(steps: u64) -> Result<String, BoxError> {
     ));
     out.push_str("| measurement | steps/s | round trip median (us) | step compute median / mean (us) | overhead per step (us) |\n|---|---|---|---|---|\n");
     for mode in [WaitMode::Spin, WaitMode::Block] {
+        if quick && mode == WaitMode::Block {
+            continue;
+        }
         let rt = raw_pingpong(
             mode,
             if mode == WaitMode::Spin {
@@ -381,6 +398,9 @@ pub fn run(steps: u64) -> Result<String, BoxError> {
     let mut rows = Vec::new();
     for n in [1usize, 2, 4] {
         for mode in [WaitMode::Spin, WaitMode::Block, WaitMode::Hybrid] {
+            if quick && (n > 1 || mode == WaitMode::Block) {
+                continue;
+            }
             // Oversubscribed spinning is slow by design: fewer steps.
             let s = if mode == WaitMode::Spin && n + 1 > cores {
                 steps / 10
@@ -400,6 +420,42 @@ pub fn run(steps: u64) -> Result<String, BoxError> {
             ));
             rows.push((n, mode, r));
         }
+    }
+    let spin1 = rows
+        .iter()
+        .find(|(n, m, _)| *n == 1 && *m == WaitMode::Spin)
+        .map(|r| r.2.steps_per_s)
+        .unwrap_or(f64::NAN);
+    let phases = rows
+        .iter()
+        .filter(|(n, _, _)| *n == 1)
+        .map(|(_, mode, r)| {
+            let p = r.phases;
+            format!(
+                "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} |\n",
+                mode.as_str(),
+                p[0],
+                p[1],
+                p[2],
+                p[3],
+                p[4],
+                p[5],
+                1e6 / r.steps_per_s
+            )
+        })
+        .collect::<String>();
+    let footer = format!(
+        "\nspin, 1 controller, against TCP: {:.1}x the steps per second\n\n\
+         Where a step's wall time goes, 1 controller (means, us): control requests at the \
+         step boundary, `Engine::prepare` (overlapped with the controller), waiting for the \
+         input after it, `Engine::finish`, the inputs and outputs around it, publishing.\n\n\
+         | wait | boundary | prepare | wait for input | finish | around finish | publish | wall per step |\n\
+         |---|---|---|---|---|---|---|---|\n{phases}",
+        spin1 / tcp
+    );
+    if quick {
+        out.push_str(&footer);
+        return Ok(out);
     }
     // The monitor's cost is a few percent at most, below this machine's
     // noise between two runs: alternate runs with and without it, five
@@ -429,14 +485,6 @@ pub fn run(steps: u64) -> Result<String, BoxError> {
             r.overhead_us
         ));
     }
-    let spin1 = rows
-        .iter()
-        .find(|(n, m, _)| *n == 1 && *m == WaitMode::Spin)
-        .map(|r| r.2.steps_per_s)
-        .unwrap_or(f64::NAN);
-    out.push_str(&format!(
-        "\nspin, 1 controller, against TCP: {:.1}x the steps per second\n",
-        spin1 / tcp
-    ));
+    out.push_str(&footer);
     Ok(out)
 }

@@ -128,8 +128,25 @@ pub struct Counters {
     pub step_compute: stats::Histogram,
     /// `Engine::prepare` per step (us), overlapped with the controllers.
     pub prepare: stats::Histogram,
+    /// Where a step's wall time goes (us per step): control requests at
+    /// the boundary, waiting for the inputs after `prepare`, the inputs
+    /// into the engine and the outputs around `finish`, and publishing.
+    pub phases: Phases,
+    /// Wall time from the first step's start to the end of the loop (s):
+    /// `wall_seconds` less the wait for the controllers to join.
+    pub stepping_seconds: f64,
     pub max_penetration: f64,
     pub max_joint_error: f64,
+}
+
+/// The serve loop's phases besides the engine's compute (see
+/// [`Counters::phases`]).
+#[derive(Debug, Default, Clone)]
+pub struct Phases {
+    pub boundary: stats::Histogram,
+    pub wait: stats::Histogram,
+    pub around_step: stats::Histogram,
+    pub publish: stats::Histogram,
 }
 
 /// What the control loop decided.
@@ -157,6 +174,8 @@ struct Server {
     deferred: Vec<Request>,
     shutdown: bool,
     frame: Box<StateFrame>,
+    /// When the step loop started (after the controllers joined).
+    stepping: Option<Instant>,
     sequence: u64,
     status: u32,
     last_report: Option<StepReport>,
@@ -212,6 +231,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         deferred: Vec::new(),
         shutdown: false,
         frame: Box::default(),
+        stepping: None,
         sequence: 0,
         status: 0,
         last_report: None,
@@ -226,6 +246,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
     let started = Instant::now();
     let ending = s.run();
     let wall = started.elapsed().as_secs_f64();
+    s.c.stepping_seconds = s.stepping.map_or(0.0, |t| t.elapsed().as_secs_f64());
     // The last frame tells every reader the server is gone.
     s.status |= STATUS_SHUTDOWN;
     let _ = s.publish();
@@ -281,13 +302,19 @@ impl Server {
             self.publish()?;
         }
         let mut pace = Pace::new(self.opts.realtime, self.engine.state().t);
+        self.stepping = Some(Instant::now());
         loop {
             if terminated() {
                 return Ok(Ending::Signal);
             }
+            let t_boundary = Instant::now();
             if let Flow::Stop(e) = self.boundary()? {
                 return Ok(e);
             }
+            self.c
+                .phases
+                .boundary
+                .add(t_boundary.elapsed().as_secs_f64() * 1e6);
             if self.opts.steps.is_some_and(|n| self.c.steps >= n) {
                 return Ok(Ending::Steps);
             }
@@ -300,17 +327,29 @@ impl Server {
             let published = Instant::now();
             let t0 = Instant::now();
             self.engine.prepare();
-            self.c.prepare.add(t0.elapsed().as_secs_f64() * 1e6);
+            let t_wait = Instant::now();
+            self.c.prepare.add((t_wait - t0).as_secs_f64() * 1e6);
             match self.gather(k, published)? {
                 Flow::Go => {}
                 Flow::Stop(e) => return Ok(e),
             }
+            let t_step = Instant::now();
+            self.c
+                .phases
+                .wait
+                .add((t_step - t_wait).as_secs_f64() * 1e6);
             if self.paused {
                 // --on-miss pause: this step waits for `resume`.
                 self.publish()?;
                 continue;
             }
             self.take_step(k)?;
+            let t_publish = Instant::now();
+            let compute = self.c.step_compute.last_us();
+            self.c
+                .phases
+                .around_step
+                .add((t_publish - t_step).as_secs_f64() * 1e6 - compute);
             if let Some(b) = self.budget.as_mut() {
                 *b = b.saturating_sub(1);
                 if *b == 0 {
@@ -319,6 +358,10 @@ impl Server {
                 }
             }
             self.publish()?;
+            self.c
+                .phases
+                .publish
+                .add(t_publish.elapsed().as_secs_f64() * 1e6);
             pace.wait(self.engine.state().t);
         }
     }

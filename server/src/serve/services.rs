@@ -2,7 +2,9 @@
 //! definition in `cosim_shared::wire::services`, so that their limits are
 //! the server's to fix.
 
-use cosim_shared::wire::{services, ControlRequest, ControlResponse, InputFrame, StateFrame};
+use cosim_shared::wire::{
+    services, ControlRequest, ControlResponse, InputFrame, StateFrame, Written,
+};
 use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
@@ -49,6 +51,8 @@ pub struct Services {
     pub control: Server<ipc::Service, ControlRequest, (), ControlResponse, ()>,
     pub state_ready: Notifier<ipc::Service>,
     pub wake: Listener<ipc::Service>,
+    /// What earlier frames left in the state publisher's samples.
+    written: Written,
 }
 
 fn name(s: &str) -> Result<ServiceName, ServiceError> {
@@ -170,17 +174,32 @@ impl Services {
             control,
             state_ready,
             wake,
+            written: Written::default(),
         })
     }
 
     /// Publishes a frame and wakes the blocked readers.
-    pub fn publish(&self, frame: &StateFrame) -> Result<(), ServiceError> {
-        let sample = self
+    pub fn publish(&mut self, frame: &StateFrame) -> Result<(), ServiceError> {
+        let mut sample = self
             .state
             .loan_uninit()
             .map_err(|e| err("cannot loan a state sample".into())(&e))?;
+        // SAFETY: the sample's bytes are initialised: the publisher's data
+        // segment is shared memory the OS hands out zero-filled (POSIX
+        // ftruncate), and since then only frames of this publisher were
+        // written into it. StateFrame is #[repr(C)] plain numbers (u32,
+        // u64, f64, explicit padding: the layout test in wire.rs), valid
+        // for every bit pattern. `write_used` then writes every entry that
+        // differs from `frame` (the marks in `self.written` cover what
+        // earlier frames left), so the sample holds exactly `frame`.
+        let sample = unsafe {
+            sample
+                .payload_mut()
+                .assume_init_mut()
+                .write_used(frame, &mut self.written);
+            sample.assume_init()
+        };
         sample
-            .write_payload(*frame)
             .send()
             .map_err(|e| err("cannot publish the state".into())(&e))?;
         // NOTE: after the send: a reader that polled before the frame
@@ -197,7 +216,7 @@ impl Services {
             .input
             .receive()
             .map_err(|e| err("cannot receive inputs".into())(&e))?
-            .map(|s| *s.payload()))
+            .map(|s| s.payload().used_copy()))
     }
 
     /// The next control request.
