@@ -31,6 +31,21 @@
 //! ```
 //!
 //! with `a_n` the gap (stabilisation, restitution) term of each normal row.
+//!
+//! Friction rows are formed on the tangent basis. Every friction direction
+//! of a contact is `d_j = c_j t1 + s_j t2` (`c_j, s_j` the cosine and sine of
+//! `2 pi j / n_d`), and a row is linear in its direction, so with the basis
+//! rows `B = [G_b, G_n, G_t1, G_t2]` and `G_f = B C` (`C` holds `c_j, s_j`):
+//!
+//! ```text
+//! G_f^T M^-1 G_x = C^T (B^T M^-1 G_x),   Y_f = Y_B C,   b_f = C^T b_B
+//! ```
+//!
+//! So `W`, `Y` and `b` are formed on the `nb + nc + 2 nf` basis rows and the
+//! LCP's `n_d`-row blocks are expanded from them: `(nb + nc + 2 nf)^2`
+//! Delassus entries instead of `(nb + nc + n_d nf)^2` (n_d = 8, two
+//! contacts and two joints: 78 instead of 300 row couplings, which were
+//! 37 % of a resting reference step under perf).
 
 use super::applied::InvMass;
 use super::contact::Contact;
@@ -129,19 +144,31 @@ pub struct Mlcp {
     /// coefficient `mu[f]`.
     pub friction_of: Vec<usize>,
     pub mu: Vec<f64>,
-    /// `G^T nu_free` per row (plus `beta psi_b / h` on joint rows).
+    /// The basis rows `[G_b, G_n, G_t1, G_t2]`: joint rows, normal rows,
+    /// then `t1, t2` of each friction block.
+    basis: Vec<Row>,
+    /// `M^-1 B`, row by row ([`Row::weighted`]).
+    weighted: Vec<Row>,
+    /// `(cos, sin)` of each friction direction `2 pi j / n_d`.
+    dirs: Vec<(f64, f64)>,
+    /// `G^T nu_free` per basis row (plus `beta psi_b / h` on joint rows).
     b: Vec<f64>,
     /// Constant term of each row: a row's residual is `G_k^T nu' + offset_k`
     /// (`beta psi_b / h` on joint rows, `a_n` on normal rows, 0 on friction
     /// rows). The iterative solver works with it.
     pub offset: Vec<f64>,
-    /// Delassus matrix of all rows, row-major.
+    /// Delassus matrix of the basis rows, row-major.
     w: Vec<f64>,
     /// `A_bb`, then its Cholesky factor (lower triangle), column-major.
     chol: Vec<f64>,
-    /// `Y = L^-1 A_bc`, column-major `nb x m`, and `y_b = L^-1 b_b`.
+    /// `Y = L^-1 A_bc` on the basis contact rows, column-major `nb x mb`,
+    /// and `y_b = L^-1 b_b`.
     y: Vec<f64>,
     yb: Vec<f64>,
+    /// Scratch on the basis contact rows: `q`, `W - Y^T Y`, `C lambda`.
+    qb: Vec<f64>,
+    sb: Vec<f64>,
+    zb: Vec<f64>,
     mem: Option<(usize, MemBuffer)>,
     /// The pure LCP: `lcp_m` row-major `n x n`, `lcp_q`, and its solution.
     pub lcp_m: Vec<f64>,
@@ -181,7 +208,16 @@ impl Mlcp {
     ) -> Result<(), MlcpError> {
         let p = &model.params;
         let nd = p.friction_directions;
+        if self.dirs.len() != nd {
+            self.dirs.clear();
+            self.dirs.extend((0..nd).map(|j| {
+                // As Contact::direction computes it.
+                let angle = std::f64::consts::TAU * j as f64 / nd as f64;
+                (angle.cos(), angle.sin())
+            }));
+        }
         self.rows.clear();
+        self.basis.clear();
         self.b.clear();
         self.offset.clear();
         self.lcp_contacts.clear();
@@ -210,13 +246,17 @@ impl Mlcp {
             self.lcp_contacts.push(ci);
         }
         self.nc = self.lcp_contacts.len();
+        self.basis.extend_from_slice(&self.rows);
         for i in 0..self.nc {
             let c = &contacts[self.lcp_contacts[i]];
             if c.has_friction() || !p.skips.frictionless_rows {
-                for j in 0..nd {
-                    let row = Row::contact(c, c.direction(j, nd));
+                for &(cs, sn) in &self.dirs {
+                    self.rows.push(Row::contact(c, c.t1 * cs + c.t2 * sn));
+                }
+                for t in [c.t1, c.t2] {
+                    let row = Row::contact(c, t);
                     self.b.push(row.velocity(nu_free));
-                    self.rows.push(row);
+                    self.basis.push(row);
                 }
                 self.friction_of.push(i);
                 self.mu.push(c.mu);
@@ -226,18 +266,21 @@ impl Mlcp {
         self.nd = nd;
         self.offset.resize(self.rows.len(), 0.0);
 
-        // Delassus matrix W = G^T M^-1 G (symmetric). The iterative solver
-        // (`matrix_free`) needs only the joint rows' part, for the joints'
-        // response in the free normal speeds; the O(m^2) contact block is
-        // Lemke's alone.
-        // Row-major, so the joint rows' part is the first nb rows of W.
-        let r = self.rows.len();
+        // Delassus matrix of the basis rows, B^T M^-1 B (symmetric). The
+        // iterative solver (`matrix_free`) needs only the joint rows' part,
+        // for the joints' response in the free normal speeds; the contact
+        // block is Lemke's alone. Row-major, so the joint rows' part is the
+        // first nb rows.
+        let r = self.basis.len();
         let upto = if matrix_free { self.nb } else { r };
+        self.weighted.clear();
+        self.weighted
+            .extend(self.basis.iter().map(|row| row.weighted(minv)));
         self.w.clear();
         self.w.resize(upto * r, 0.0);
         for k in 0..upto {
             for l in k..r {
-                let v = self.rows[k].coupling(&self.rows[l], minv);
+                let v = self.basis[k].dot(&self.weighted[l]);
                 self.w[k * r + l] = v;
                 if l < upto {
                     self.w[l * r + k] = v;
@@ -254,9 +297,34 @@ impl Mlcp {
         Ok(())
     }
 
+    /// Contact row `i` of the LCP (normal rows, then the friction blocks) as
+    /// a combination of basis contact rows (index into the basis past the
+    /// joint rows): `(first, c1, c2)` means `c1 B[first] + c2 B[first + 1]`
+    /// (`c2 = 0` and no second row for a normal row).
+    fn expansion(&self, i: usize) -> (usize, f64, f64) {
+        if i < self.nc {
+            (i, 1.0, 0.0)
+        } else {
+            let (f, j) = ((i - self.nc) / self.nd, (i - self.nc) % self.nd);
+            let (cs, sn) = self.dirs[j];
+            (self.nc + 2 * f, cs, sn)
+        }
+    }
+
+    /// `sum_k C_ki v_k` over the basis contact rows: the value of a
+    /// quantity linear in the row (`v` per basis contact row) at LCP row `i`.
+    fn expand(&self, i: usize, v: impl Fn(usize) -> f64) -> f64 {
+        let (k, c1, c2) = self.expansion(i);
+        if i < self.nc {
+            v(k)
+        } else {
+            c1 * v(k) + c2 * v(k + 1)
+        }
+    }
+
     /// Factors `A_bb` and forms `Y = L^-1 A_bc`, `y_b = L^-1 b_b`.
     fn reduce_joints(&mut self) -> Result<(), MlcpError> {
-        let (nb, r) = (self.nb, self.rows.len());
+        let (nb, r) = (self.nb, self.basis.len());
         let m = r - nb;
         self.chol.clear();
         self.y.clear();
@@ -345,17 +413,22 @@ impl Mlcp {
 
     /// The pure LCP's right-hand side `q` alone (no matrix): what the
     /// iterative solver needs for its normal offsets and residual scale.
+    /// Formed on the basis contact rows (in `self.qb`), then expanded.
     fn form_rhs(&mut self, contacts: &[Contact], p: &Params) {
-        let (nb, r) = (self.nb, self.rows.len());
-        let m = r - nb;
+        let (nb, r) = (self.nb, self.basis.len());
+        let mb = r - nb;
         let n = self.lcp_size();
+        self.qb.clear();
+        for i in 0..mb {
+            let yi = &self.y[i * nb..(i + 1) * nb];
+            let schur: f64 = yi.iter().zip(&self.yb).map(|(a, b)| a * b).sum();
+            self.qb.push(self.b[nb + i] - schur);
+        }
         self.lcp_m.clear();
         self.lcp_q.clear();
         self.lcp_q.resize(n, 0.0);
-        for i in 0..m {
-            let yi = &self.y[i * nb..(i + 1) * nb];
-            let schur: f64 = yi.iter().zip(&self.yb).map(|(a, b)| a * b).sum();
-            self.lcp_q[i] = self.b[nb + i] - schur;
+        for i in 0..self.contact_rows() {
+            self.lcp_q[i] = self.expand(i, |k| self.qb[k]);
         }
         // Gap terms: the free normal velocity includes the joints' response.
         for i in 0..self.nc {
@@ -367,19 +440,37 @@ impl Mlcp {
     }
 
     /// Forms the pure LCP: `q` as [`Mlcp::form_rhs`] does, the matrix from
-    /// `W - Y^T Y` with `E`, `-E^T` and `U`.
+    /// `W - Y^T Y` on the basis (in `self.sb`), expanded, with `E`, `-E^T`
+    /// and `U`.
     fn form_lcp(&mut self, contacts: &[Contact], p: &Params) {
         self.form_rhs(contacts, p);
-        let (nb, r) = (self.nb, self.rows.len());
-        let m = r - nb;
+        let (nb, r) = (self.nb, self.basis.len());
+        let mb = r - nb;
+        let m = self.contact_rows();
         let n = self.lcp_size();
-        self.lcp_m.resize(n * n, 0.0);
-        for i in 0..m {
+        self.sb.clear();
+        self.sb.resize(mb * mb, 0.0);
+        for i in 0..mb {
             let yi = &self.y[i * nb..(i + 1) * nb];
-            for j in 0..m {
+            for j in i..mb {
                 let yj = &self.y[j * nb..(j + 1) * nb];
                 let schur: f64 = yi.iter().zip(yj).map(|(a, b)| a * b).sum();
-                self.lcp_m[i * n + j] = self.w[(nb + i) * r + nb + j] - schur;
+                let v = self.w[(nb + i) * r + nb + j] - schur;
+                self.sb[i * mb + j] = v;
+                self.sb[j * mb + i] = v;
+            }
+        }
+        self.lcp_m.resize(n * n, 0.0);
+        for i in 0..m {
+            let (ki, ci1, ci2) = self.expansion(i);
+            for j in 0..m {
+                let sb = &self.sb;
+                let row = |k: usize| self.expand(j, |l| sb[k * mb + l]);
+                self.lcp_m[i * n + j] = if i < self.nc {
+                    row(ki)
+                } else {
+                    ci1 * row(ki) + ci2 * row(ki + 1)
+                };
             }
         }
         // E and its transpose, U: friction rows of contact f sit at
@@ -399,10 +490,24 @@ impl Mlcp {
     /// `p_b = -L^-T (y_b + Y lambda)` and `nu' = nu_free + M^-1 G [p_b; lambda]`.
     pub fn recover(&mut self, minv: &[InvMass], nu_free: &[f64], nu: &mut Vec<f64>) {
         let (nb, m) = (self.nb, self.contact_rows());
+        let mb = self.basis.len() - nb;
         self.p_b.clear();
         if nb > 0 {
+            // lambda on the basis: C lambda (normal impulses as they are,
+            // each friction block summed onto t1 and t2).
+            self.zb.clear();
+            self.zb.resize(mb, 0.0);
+            for i in 0..m {
+                let (k, c1, c2) = self.expansion(i);
+                if i < self.nc {
+                    self.zb[k] += self.z[i];
+                } else {
+                    self.zb[k] += c1 * self.z[i];
+                    self.zb[k + 1] += c2 * self.z[i];
+                }
+            }
             for k in 0..nb {
-                let yk: f64 = (0..m).map(|j| self.y[j * nb + k] * self.z[j]).sum();
+                let yk: f64 = (0..mb).map(|j| self.y[j * nb + k] * self.zb[j]).sum();
                 self.p_b.push(-(self.yb[k] + yk));
             }
             let l = MatRef::from_column_major_slice(&self.chol, nb, nb);

@@ -105,15 +105,40 @@ impl Row {
 
     /// Delassus entry `G_k^T M^-1 G_l`: nonzero only where the rows share a body.
     pub fn coupling(&self, other: &Row, minv: &[InvMass]) -> f64 {
-        let mut sum = 0.0;
-        for j in [self.a, self.b].into_iter().flatten() {
-            for k in [other.a, other.b].into_iter().flatten() {
-                if j.body == k.body {
-                    let m = &minv[j.body];
-                    sum += m.inv_m * j.lin.dot(&k.lin) + j.ang.dot(&(m.inv_i * k.ang));
+        self.dot(&other.weighted(minv))
+    }
+
+    /// The row's impulse response `M^-1 G_k` on each of its bodies, as a
+    /// row (`lin / m`, `I^-1 ang`): with it, a Delassus entry is a plain
+    /// [`Row::dot`], and a matrix of couplings weighs each row once instead
+    /// of once per entry.
+    pub fn weighted(&self, minv: &[InvMass]) -> Row {
+        let w = |j: Option<BodyJac>| {
+            j.map(|j| {
+                let m = &minv[j.body];
+                BodyJac {
+                    body: j.body,
+                    lin: j.lin * m.inv_m,
+                    ang: m.inv_i * j.ang,
                 }
-            }
+            })
+        };
+        Row {
+            a: w(self.a),
+            b: w(self.b),
         }
-        sum
+    }
+
+    /// `sum over shared bodies of lin . lin' + ang . ang'`: with `other`
+    /// [`Row::weighted`], the Delassus entry.
+    pub fn dot(&self, other: &Row) -> f64 {
+        let part = |j: &Option<BodyJac>, k: &Option<BodyJac>| match (j, k) {
+            (Some(j), Some(k)) if j.body == k.body => j.lin.dot(&k.lin) + j.ang.dot(&k.ang),
+            _ => 0.0,
+        };
+        part(&self.a, &other.a)
+            + part(&self.a, &other.b)
+            + part(&self.b, &other.a)
+            + part(&self.b, &other.b)
     }
 }
