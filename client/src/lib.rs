@@ -366,6 +366,26 @@ impl StateReader {
         Ok(last)
     }
 
+    /// The next sample in the buffer, or with `newest` the newest one (the
+    /// older ones dropped unread), read in place in shared memory.
+    fn receive(
+        &self,
+        newest: bool,
+    ) -> Result<Option<iceoryx2::sample::Sample<ipc::Service, StateFrame, ()>>, ClientError> {
+        let mut got = None;
+        while let Some(s) = self
+            .sub
+            .receive()
+            .map_err(|e| ipc("cannot receive the state")(&e))?
+        {
+            got = Some(s);
+            if !newest {
+                break;
+            }
+        }
+        Ok(got)
+    }
+
     /// Waits for a frame that `accept` takes, in the given mode.
     fn wait(
         &self,
@@ -373,8 +393,29 @@ impl StateReader {
         mode: WaitMode,
         timeout: Duration,
         newest: bool,
-        mut accept: impl FnMut(&StateFrame) -> bool,
+        accept: impl FnMut(&StateFrame) -> bool,
     ) -> Result<StateFrame, ClientError> {
+        let mut out = None;
+        self.wait_with(node, mode, timeout, newest, accept, |f| {
+            out = Some(f.used_copy())
+        })?;
+        out.ok_or(ClientError::Timeout {
+            what: "state frame",
+            after: timeout,
+        })
+    }
+
+    /// Waits for a frame that `accept` takes, in the given mode, and hands
+    /// it to `take` where it lies in shared memory (no copy on the way).
+    fn wait_with(
+        &self,
+        node: &Node<ipc::Service>,
+        mode: WaitMode,
+        timeout: Duration,
+        newest: bool,
+        mut accept: impl FnMut(&StateFrame) -> bool,
+        mut take: impl FnMut(&StateFrame),
+    ) -> Result<(), ClientError> {
         let start = Instant::now();
         let spin_for = match mode {
             WaitMode::Spin => timeout,
@@ -383,10 +424,10 @@ impl StateReader {
         };
         let mut spins = 0u32;
         loop {
-            let got = if newest { self.latest()? } else { self.poll()? };
-            if let Some(f) = got {
-                if accept(&f) {
-                    return Ok(f);
+            if let Some(sample) = self.receive(newest)? {
+                if accept(sample.payload()) {
+                    take(sample.payload());
+                    return Ok(());
                 }
                 continue;
             }
@@ -443,7 +484,11 @@ pub struct Controller {
     /// The step answered last, so that a frame published again for the same
     /// step (after a join or a pause) is not answered twice.
     answered: Option<u64>,
-    last: Option<StateFrame>,
+    /// The last frame received (valid once `has_last`), written in place
+    /// entry by entry (`last_written` marks what earlier frames left).
+    last: Box<StateFrame>,
+    has_last: bool,
+    last_written: Written,
     sequence: u64,
     info: ControlResponse,
     /// What earlier inputs left in the input publisher's samples.
@@ -484,7 +529,9 @@ impl Controller {
             input,
             wait,
             answered: None,
-            last: None,
+            last: Box::default(),
+            has_last: false,
+            last_written: Written::default(),
             sequence: 0,
             info,
             written: Written::default(),
@@ -506,29 +553,49 @@ impl Controller {
 
     /// The last frame received.
     pub fn last_state(&self) -> Option<&StateFrame> {
-        self.last.as_ref()
+        self.has_last.then_some(&*self.last)
     }
 
     /// Waits for the state of a step not yet answered. A frame with
     /// `STATUS_SHUTDOWN` ends the session with [`ClientError::Shutdown`].
     pub fn next_state(&mut self, timeout: Duration) -> Result<StateFrame, ClientError> {
+        self.next_state_ref(timeout).copied()
+    }
+
+    /// [`Controller::next_state`] without the copy: the frame stays in the
+    /// controller (also [`Controller::last_state`]) until the next call.
+    /// Only the entries in use are read from shared memory.
+    pub fn next_state_ref(&mut self, timeout: Duration) -> Result<&StateFrame, ClientError> {
         let answered = self.answered;
-        let frame = self
-            .reader
-            .wait(&self.conn.node, self.wait, timeout, true, |f| {
+        let Controller {
+            reader,
+            conn,
+            wait,
+            last,
+            last_written,
+            ..
+        } = self;
+        reader.wait_with(
+            &conn.node,
+            *wait,
+            timeout,
+            true,
+            |f| {
                 f.status & STATUS_SHUTDOWN != 0
                     || (f.status & STATUS_WAITING == 0 && Some(f.step) != answered)
-            })?;
-        self.last = Some(frame);
-        if frame.status & STATUS_SHUTDOWN != 0 {
+            },
+            |f| last.write_used(f, last_written),
+        )?;
+        self.has_last = true;
+        if self.last.status & STATUS_SHUTDOWN != 0 {
             return Err(ClientError::Shutdown);
         }
-        Ok(frame)
+        Ok(&self.last)
     }
 
     /// Sends `input` as the answer to the last state received.
     pub fn send(&mut self, mut input: InputFrame) -> Result<(), ClientError> {
-        let step = self.last.map_or(0, |f| f.step);
+        let step = if self.has_last { self.last.step } else { 0 };
         input.version = PROTOCOL_VERSION;
         input.controller_id = self.id;
         input.step = step;
@@ -564,10 +631,7 @@ impl Controller {
             .send()
             .map_err(|e| ipc("cannot send the input")(&e))?;
         // A spinning server needs no wake-up.
-        if self
-            .last
-            .is_none_or(|f| f.status & STATUS_SERVER_SPINS == 0)
-        {
+        if !self.has_last || self.last.status & STATUS_SERVER_SPINS == 0 {
             let _ = self.conn.wake.notify();
         }
         Ok(())

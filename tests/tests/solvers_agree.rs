@@ -53,21 +53,24 @@ fn auto_is_lemke_on_small_problems_and_says_so() {
     assert_eq!(lemke.state(), auto.state());
 }
 
-/// The fallback of `auto` inside the engine: on the reference scene Lemke
-/// alone ends on a ray at step 33,619 (both spheres touching each other and
-/// the floor while joined: a 20-unknown LCP of condition 2e17, found by the
-/// stress suite's long run). The same steps with `auto` go on: that step is
-/// solved by PGS and reported as such, every other step is Lemke's.
+/// The fallback of `auto` inside the engine. Lemke's failures on the
+/// reference scene are rare and chaotic (at one time a ray at step 33,619
+/// of a closed-loop contact; a change of round-off moves it), so the test
+/// makes them certain: a pivot cap of 4 (`lemke_max_pivots`) fails every
+/// step that needs more. Lemke alone stops with `pivot_limit`; `auto` goes
+/// on, solves such steps with PGS and says so, and every other step is
+/// Lemke's.
 #[test]
 fn auto_falls_back_to_pgs_where_lemke_fails() {
     let scene = scenes::reference().expect("built-in scene");
-    let mut lemke = Engine::new(Model::from_scene(&scene));
     let mut model = Model::from_scene(&scene);
+    model.params.lemke_max_pivots = Some(4);
+    let mut lemke = Engine::new(model.clone());
     model.params.solver = SolverChoice::Auto;
     let mut auto = Engine::new(model);
     let mut lemke_failure = None;
     let mut fallbacks = Vec::new();
-    for _ in 0..34_000 {
+    for _ in 0..3000 {
         let r = auto.step();
         assert!(r.ok(), "auto step {} failed: {}", r.step, r.status());
         if r.solver == "pgs (auto: lemke failed)" {
@@ -82,11 +85,7 @@ fn auto_falls_back_to_pgs_where_lemke_fails() {
             }
         }
     }
-    let (step, code) = lemke_failure.expect("Lemke alone fails within 34,000 steps");
-    assert_eq!(code, "ray_termination");
-    assert_eq!(
-        fallbacks.first(),
-        Some(&step),
-        "auto fell back at {fallbacks:?}, Lemke failed at {step}"
-    );
+    let (_step, code) = lemke_failure.expect("Lemke with 4 pivots fails within 3000 steps");
+    assert_eq!(code, "pivot_limit");
+    assert!(fallbacks.len() > 10, "{} fallbacks", fallbacks.len());
 }

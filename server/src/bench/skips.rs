@@ -142,8 +142,9 @@ fn model(scene: &Scene, solver: SolverChoice) -> Model {
     Model::from_scene(&s)
 }
 
-/// The skips on their scenes: pruning and warm start on the reference
-/// scene (Lemke, PGS), friction rows on the frictionless scene.
+/// The skips on their scenes: pruning, Lemke's support guess and PGS's
+/// warm start on the reference scene, friction rows on the frictionless
+/// scene.
 pub fn measure(steps: u64) -> Result<Vec<Measured>, String> {
     let reference = crate::scenes::reference().map_err(|e| e.to_string())?;
     let frictionless =
@@ -167,6 +168,17 @@ pub fn measure(steps: u64) -> Result<Vec<Measured>, String> {
     out.push(Measured::of(
         "no friction rows where mu = 0",
         "frictionless, Lemke",
+        on,
+        off,
+        steps,
+    ));
+
+    let on = model(&reference, SolverChoice::Lemke);
+    let mut off = on.clone();
+    off.params.skips.lemke_guess = false;
+    out.push(Measured::of(
+        "Lemke starts from the last support",
+        "reference, Lemke",
         on,
         off,
         steps,

@@ -68,6 +68,52 @@ const SINGULAR_PIVOT: f64 = 1e-12;
 /// Relative diagonal shift of a singular joint block (see `reduce_joints`).
 const JOINT_CFM: f64 = 1e-9;
 
+/// Joint blocks up to this many rows (8 spherical joints) are factored by
+/// the plain loops of [`small`], larger ones by faer's blocked kernels: on
+/// the reference scene's 6 x 6 block faer's dispatch cost more than the
+/// arithmetic (the joint reduction took 0.7 us per build).
+const SMALL_BLOCK: usize = 24;
+
+/// Cholesky factorisation and triangular solves for small column-major
+/// blocks, where plain loops beat any dispatch.
+mod small {
+    /// `A = L L^T` in place (lower triangle, column-major `n x n`); the
+    /// index of the first pivot that is not positive on failure.
+    pub fn cholesky(a: &mut [f64], n: usize) -> Result<(), usize> {
+        for j in 0..n {
+            let d = a[j + j * n] - (0..j).map(|k| a[j + k * n] * a[j + k * n]).sum::<f64>();
+            if d.is_nan() || d <= 0.0 {
+                return Err(j);
+            }
+            let djj = d.sqrt();
+            a[j + j * n] = djj;
+            for i in j + 1..n {
+                let s: f64 = (0..j).map(|k| a[i + k * n] * a[j + k * n]).sum();
+                a[i + j * n] = (a[i + j * n] - s) / djj;
+            }
+        }
+        Ok(())
+    }
+
+    /// `X <- L^-1 X` for the columns of `x` (column-major, `n` rows).
+    pub fn solve_lower(l: &[f64], n: usize, x: &mut [f64]) {
+        for col in x.chunks_exact_mut(n) {
+            for i in 0..n {
+                let s: f64 = (0..i).map(|k| l[i + k * n] * col[k]).sum();
+                col[i] = (col[i] - s) / l[i + i * n];
+            }
+        }
+    }
+
+    /// `x <- L^-T x`.
+    pub fn solve_upper_transposed(l: &[f64], n: usize, x: &mut [f64]) {
+        for i in (0..n).rev() {
+            let s: f64 = (i + 1..n).map(|k| l[k + i * n] * x[k]).sum();
+            x[i] = (x[i] - s) / l[i + i * n];
+        }
+    }
+}
+
 /// Why the reduction failed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum MlcpError {
@@ -130,7 +176,8 @@ pub fn normal_offset(c: &Contact, v_n_free: f64, p: &Params) -> f64 {
 /// The step's mLCP, its reduction and its scratch space.
 #[derive(Default)]
 pub struct Mlcp {
-    /// Rows: joints (3 each), then normal rows, then friction rows.
+    /// Rows: joints (3 each), then normal rows, then (for the iterative
+    /// solver, see [`Mlcp::add_friction_rows`]) friction rows.
     pub rows: Vec<Row>,
     /// Joint rows.
     pub nb: usize,
@@ -165,9 +212,13 @@ pub struct Mlcp {
     /// and `y_b = L^-1 b_b`.
     y: Vec<f64>,
     yb: Vec<f64>,
+    /// Each LCP contact row on the basis (see [`Mlcp::fill_coeffs`]).
+    coeffs: Vec<(usize, f64, usize, f64)>,
     /// Scratch on the basis contact rows: `q`, `W - Y^T Y`, `C lambda`.
     qb: Vec<f64>,
     sb: Vec<f64>,
+    /// `S C`, row-major `mb x m`.
+    sc: Vec<f64>,
     zb: Vec<f64>,
     mem: Option<(usize, MemBuffer)>,
     /// The pure LCP: `lcp_m` row-major `n x n`, `lcp_q`, and its solution.
@@ -250,9 +301,6 @@ impl Mlcp {
         for i in 0..self.nc {
             let c = &contacts[self.lcp_contacts[i]];
             if c.has_friction() || !p.skips.frictionless_rows {
-                for &(cs, sn) in &self.dirs {
-                    self.rows.push(Row::contact(c, c.t1 * cs + c.t2 * sn));
-                }
                 for t in [c.t1, c.t2] {
                     let row = Row::contact(c, t);
                     self.b.push(row.velocity(nu_free));
@@ -265,6 +313,9 @@ impl Mlcp {
         self.nf = self.friction_of.len();
         self.nd = nd;
         self.offset.resize(self.rows.len(), 0.0);
+        if matrix_free {
+            self.add_friction_rows(contacts);
+        }
 
         // Delassus matrix of the basis rows, B^T M^-1 B (symmetric). The
         // iterative solver (`matrix_free`) needs only the joint rows' part,
@@ -288,6 +339,7 @@ impl Mlcp {
             }
         }
 
+        self.fill_coeffs();
         self.reduce_joints()?;
         if matrix_free {
             self.form_rhs(contacts, p);
@@ -297,29 +349,24 @@ impl Mlcp {
         Ok(())
     }
 
-    /// Contact row `i` of the LCP (normal rows, then the friction blocks) as
-    /// a combination of basis contact rows (index into the basis past the
-    /// joint rows): `(first, c1, c2)` means `c1 B[first] + c2 B[first + 1]`
-    /// (`c2 = 0` and no second row for a normal row).
-    fn expansion(&self, i: usize) -> (usize, f64, f64) {
-        if i < self.nc {
-            (i, 1.0, 0.0)
-        } else {
-            let (f, j) = ((i - self.nc) / self.nd, (i - self.nc) % self.nd);
-            let (cs, sn) = self.dirs[j];
-            (self.nc + 2 * f, cs, sn)
+    /// Fills [`Mlcp::coeffs`]: contact row `i` of the LCP (normal rows,
+    /// then the friction blocks) as `c1 B[k1] + c2 B[k2]` over the basis
+    /// contact rows (indices past the joint rows); a normal row is itself
+    /// (`k2 = k1`, `c2 = 0`). A table, so that the O(m^2) expansion does no
+    /// index arithmetic.
+    fn fill_coeffs(&mut self) {
+        self.coeffs.clear();
+        self.coeffs.extend((0..self.nc).map(|i| (i, 1.0, i, 0.0)));
+        for f in 0..self.nf {
+            let k = self.nc + 2 * f;
+            self.coeffs
+                .extend(self.dirs.iter().map(|&(cs, sn)| (k, cs, k + 1, sn)));
         }
     }
 
-    /// `sum_k C_ki v_k` over the basis contact rows: the value of a
-    /// quantity linear in the row (`v` per basis contact row) at LCP row `i`.
-    fn expand(&self, i: usize, v: impl Fn(usize) -> f64) -> f64 {
-        let (k, c1, c2) = self.expansion(i);
-        if i < self.nc {
-            v(k)
-        } else {
-            c1 * v(k) + c2 * v(k + 1)
-        }
+    /// `(cos, sin)` of friction direction `j` as the rows use it.
+    pub fn direction(&self, j: usize) -> (f64, f64) {
+        self.dirs[j]
     }
 
     /// Factors `A_bb` and forms `Y = L^-1 A_bc`, `y_b = L^-1 b_b`.
@@ -341,7 +388,7 @@ impl Mlcp {
         self.yb.extend_from_slice(&self.b[..nb]);
         let max_diag = (0..nb).fold(0.0f64, |a, i| a.max(self.w[i * r + i]));
 
-        if self.mem.as_ref().is_none_or(|(cap, _)| *cap < nb) {
+        if nb > SMALL_BLOCK && self.mem.as_ref().is_none_or(|(cap, _)| *cap < nb) {
             let req = cholesky_in_place_scratch::<f64>(nb, Par::Seq, Default::default());
             self.mem = Some((nb, MemBuffer::new(req)));
         }
@@ -361,25 +408,34 @@ impl Mlcp {
                         .push(self.w[i * r + j] + if i == j { shift } else { 0.0 });
                 }
             }
-            let Some((_, mem)) = self.mem.as_mut() else {
-                unreachable!("scratch allocated above")
+            let factored = if nb <= SMALL_BLOCK {
+                small::cholesky(&mut self.chol, nb)
+            } else {
+                let Some((_, mem)) = self.mem.as_mut() else {
+                    unreachable!("scratch allocated above")
+                };
+                let stack = MemStack::new(mem);
+                let a = MatMut::from_column_major_slice_mut(&mut self.chol, nb, nb);
+                cholesky_in_place(
+                    a,
+                    LltRegularization::default(),
+                    Par::Seq,
+                    stack,
+                    Default::default(),
+                )
+                .map(|_| ())
+                .map_err(|e| match e {
+                    faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
+                        index
+                    }
+                })
             };
-            let stack = MemStack::new(mem);
-            let a = MatMut::from_column_major_slice_mut(&mut self.chol, nb, nb);
-            failure = match cholesky_in_place(
-                a,
-                LltRegularization::default(),
-                Par::Seq,
-                stack,
-                Default::default(),
-            ) {
-                Err(faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index }) => {
-                    Some(MlcpError::SingularJointBlock {
-                        row: index,
-                        pivot: 0.0,
-                    })
-                }
-                Ok(_) => (0..nb).find_map(|i| {
+            failure = match factored {
+                Err(index) => Some(MlcpError::SingularJointBlock {
+                    row: index,
+                    pivot: 0.0,
+                }),
+                Ok(()) => (0..nb).find_map(|i| {
                     let d = self.chol[i * nb + i];
                     (d * d < SINGULAR_PIVOT * max_diag).then_some(MlcpError::SingularJointBlock {
                         row: i,
@@ -394,6 +450,11 @@ impl Mlcp {
         }
         if let Some(e) = failure {
             return Err(e);
+        }
+        if nb <= SMALL_BLOCK {
+            small::solve_lower(&self.chol, nb, &mut self.y);
+            small::solve_lower(&self.chol, nb, &mut self.yb);
+            return Ok(());
         }
         let l = MatRef::from_column_major_slice(&self.chol, nb, nb);
         if m > 0 {
@@ -427,8 +488,8 @@ impl Mlcp {
         self.lcp_m.clear();
         self.lcp_q.clear();
         self.lcp_q.resize(n, 0.0);
-        for i in 0..self.contact_rows() {
-            self.lcp_q[i] = self.expand(i, |k| self.qb[k]);
+        for (q, &(k1, c1, k2, c2)) in self.lcp_q.iter_mut().zip(&self.coeffs) {
+            *q = c1 * self.qb[k1] + c2 * self.qb[k2];
         }
         // Gap terms: the free normal velocity includes the joints' response.
         for i in 0..self.nc {
@@ -460,17 +521,21 @@ impl Mlcp {
                 self.sb[j * mb + i] = v;
             }
         }
+        // M_cc = C^T S C in two passes: T = S C (mb x m), then each LCP row
+        // is a combination of two rows of T (contiguous, so it vectorises).
+        self.sc.clear();
+        self.sc.resize(mb * m, 0.0);
+        for (k, t) in self.sc.chunks_exact_mut(m.max(1)).enumerate() {
+            let sk = &self.sb[k * mb..][..mb];
+            for (out, &(kj1, cj1, kj2, cj2)) in t.iter_mut().zip(&self.coeffs) {
+                *out = cj1 * sk[kj1] + cj2 * sk[kj2];
+            }
+        }
         self.lcp_m.resize(n * n, 0.0);
-        for i in 0..m {
-            let (ki, ci1, ci2) = self.expansion(i);
-            for j in 0..m {
-                let sb = &self.sb;
-                let row = |k: usize| self.expand(j, |l| sb[k * mb + l]);
-                self.lcp_m[i * n + j] = if i < self.nc {
-                    row(ki)
-                } else {
-                    ci1 * row(ki) + ci2 * row(ki + 1)
-                };
+        for (i, &(ki1, ci1, ki2, ci2)) in self.coeffs.iter().enumerate() {
+            let (t1, t2) = (&self.sc[ki1 * m..][..m], &self.sc[ki2 * m..][..m]);
+            for ((out, a), b) in self.lcp_m[i * n..i * n + m].iter_mut().zip(t1).zip(t2) {
+                *out = ci1 * a + ci2 * b;
             }
         }
         // E and its transpose, U: friction rows of contact f sit at
@@ -488,42 +553,106 @@ impl Mlcp {
 
     /// From the LCP solution in `self.z`: joint impulses
     /// `p_b = -L^-T (y_b + Y lambda)` and `nu' = nu_free + M^-1 G [p_b; lambda]`.
-    pub fn recover(&mut self, minv: &[InvMass], nu_free: &[f64], nu: &mut Vec<f64>) {
+    pub fn recover(&mut self, nu_free: &[f64], nu: &mut Vec<f64>) {
         let (nb, m) = (self.nb, self.contact_rows());
         let mb = self.basis.len() - nb;
+        // lambda on the basis: C lambda (normal impulses as they are, each
+        // friction block summed onto t1 and t2), since G_f p_f = B C p_f.
+        self.zb.clear();
+        self.zb.resize(mb, 0.0);
+        for (&zi, &(k1, c1, k2, c2)) in self.z[..m].iter().zip(&self.coeffs) {
+            self.zb[k1] += c1 * zi;
+            self.zb[k2] += c2 * zi;
+        }
         self.p_b.clear();
         if nb > 0 {
-            // lambda on the basis: C lambda (normal impulses as they are,
-            // each friction block summed onto t1 and t2).
-            self.zb.clear();
-            self.zb.resize(mb, 0.0);
-            for i in 0..m {
-                let (k, c1, c2) = self.expansion(i);
-                if i < self.nc {
-                    self.zb[k] += self.z[i];
-                } else {
-                    self.zb[k] += c1 * self.z[i];
-                    self.zb[k + 1] += c2 * self.z[i];
-                }
-            }
             for k in 0..nb {
                 let yk: f64 = (0..mb).map(|j| self.y[j * nb + k] * self.zb[j]).sum();
                 self.p_b.push(-(self.yb[k] + yk));
             }
-            let l = MatRef::from_column_major_slice(&self.chol, nb, nb);
-            solve_upper_triangular_in_place(
-                l.transpose(),
-                MatMut::from_column_major_slice_mut(&mut self.p_b, nb, 1),
-                Par::Seq,
-            );
+            if nb <= SMALL_BLOCK {
+                small::solve_upper_transposed(&self.chol, nb, &mut self.p_b);
+            } else {
+                let l = MatRef::from_column_major_slice(&self.chol, nb, nb);
+                solve_upper_triangular_in_place(
+                    l.transpose(),
+                    MatMut::from_column_major_slice_mut(&mut self.p_b, nb, 1),
+                    Par::Seq,
+                );
+            }
         }
         nu.clear();
         nu.extend_from_slice(nu_free);
-        for (k, row) in self.rows.iter().enumerate() {
-            let impulse = if k < nb { self.p_b[k] } else { self.z[k - nb] };
+        for (k, row) in self.weighted.iter().enumerate() {
+            let impulse = if k < nb { self.p_b[k] } else { self.zb[k - nb] };
             if impulse != 0.0 {
-                row.apply(impulse, minv, nu);
+                row.add_to(impulse, nu);
             }
         }
+    }
+
+    /// The friction rows of every block, one per direction, after the
+    /// normal rows in [`Mlcp::rows`]: what the iterative solver sweeps.
+    /// Lemke's path works on the basis alone, so `build` leaves them out
+    /// unless asked for the matrix-free problem.
+    pub fn add_friction_rows(&mut self, contacts: &[Contact]) {
+        if self.rows.len() > self.nb + self.nc {
+            return;
+        }
+        for &i in &self.friction_of {
+            let c = &contacts[self.lcp_contacts[i]];
+            for &(cs, sn) in &self.dirs {
+                self.rows.push(Row::contact(c, c.t1 * cs + c.t2 * sn));
+            }
+        }
+        self.offset.resize(self.rows.len(), 0.0);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::small;
+
+    /// The small-block loops against the definition: `L L^T = A`,
+    /// `L (L^-1 b) = b`, `L^T (L^-T b) = b`, and a singular block refused at
+    /// its dependent row.
+    #[test]
+    fn small_cholesky_and_solves() {
+        let n = 5;
+        // A = B B^T + I, B with entries from a fixed sequence.
+        let b: Vec<f64> = (0..n * n)
+            .map(|k| ((k * 37 % 11) as f64 - 5.0) / 3.0)
+            .collect();
+        let mut a = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                a[i + j * n] = (0..n).map(|k| b[i + k * n] * b[j + k * n]).sum::<f64>()
+                    + if i == j { 1.0 } else { 0.0 };
+            }
+        }
+        let mut l = a.clone();
+        small::cholesky(&mut l, n).unwrap();
+        for i in 0..n {
+            for j in 0..=i {
+                let llt: f64 = (0..=j).map(|k| l[i + k * n] * l[j + k * n]).sum();
+                assert!((llt - a[i + j * n]).abs() < 1e-12 * a[i + i * n], "{i} {j}");
+            }
+        }
+        let rhs: Vec<f64> = (0..n).map(|i| i as f64 - 1.5).collect();
+        let mut x = rhs.clone();
+        small::solve_lower(&l, n, &mut x);
+        for i in 0..n {
+            let lx: f64 = (0..=i).map(|k| l[i + k * n] * x[k]).sum();
+            assert!((lx - rhs[i]).abs() < 1e-12);
+        }
+        let mut x = rhs.clone();
+        small::solve_upper_transposed(&l, n, &mut x);
+        for i in 0..n {
+            let ltx: f64 = (i..n).map(|k| l[k + i * n] * x[k]).sum();
+            assert!((ltx - rhs[i]).abs() < 1e-12);
+        }
+        // Two equal rows: the second pivot is zero.
+        let mut s = vec![1.0, 1.0, 1.0, 1.0];
+        assert_eq!(small::cholesky(&mut s, 2), Err(1));
     }
 }

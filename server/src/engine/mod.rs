@@ -47,6 +47,50 @@ use solver::{Lcp, Lemke, LemkeError, Pgs, PgsParams, PgsProblem};
 pub const AUTO_PGS_SIZE: usize = 600;
 use std::time::Instant;
 
+/// Lemke's guess for this step's LCP from the last step's final one, by
+/// contact identity (as PGS's warm start): each contact that was in it with
+/// the same rows keeps its normal, friction and slack flags; a new contact
+/// starts inactive. Into `guess`; false when nothing carries over.
+///
+/// By identity rather than only for an identical layout, so that pruned and
+/// full runs stay bit-identical (prune.rs): the full LCP of a run with
+/// `full = true` holds the pruned one's contacts plus inactive ones, and
+/// gets the same support, hence the same answer, where the guess holds.
+fn carry_guess(state: &State, m: &Mlcp, contacts: &[Contact], guess: &mut Vec<bool>) -> bool {
+    let (nc, nd) = (m.nc, m.nd);
+    guess.clear();
+    guess.resize(m.lcp_size(), false);
+    let prev = &state.warm_lcp;
+    let prev_nf = prev.iter().filter(|&&(_, f)| f).count();
+    if prev.is_empty() || state.warm_active.len() != prev.len() + prev_nf * (nd + 1) {
+        return false;
+    }
+    let mut any = false;
+    let mut friction = m.friction_of.iter().enumerate().peekable();
+    for (i, &ci) in m.lcp_contacts.iter().enumerate() {
+        let f = friction.next_if(|(_, &row)| row == i).map(|(f, _)| f);
+        let id = contacts[ci].id;
+        let Some(j) = prev.iter().position(|&(pid, _)| pid == id) else {
+            continue;
+        };
+        if prev[j].1 != f.is_some() {
+            continue;
+        }
+        guess[i] = state.warm_active[j];
+        if let Some(f) = f {
+            // The last step's friction block of contact j: friction
+            // contacts before it.
+            let pf = prev[..j].iter().filter(|&&(_, fr)| fr).count();
+            let (src, dst) = (prev.len() + pf * nd, nc + f * nd);
+            guess[dst..dst + nd].copy_from_slice(&state.warm_active[src..src + nd]);
+            let (src_s, dst_s) = (prev.len() + prev_nf * nd + pf, m.contact_rows() + f);
+            guess[dst_s] = state.warm_active[src_s];
+        }
+        any = true;
+    }
+    any
+}
+
 /// What an impulse row of the output describes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ImpulseKind {
@@ -89,6 +133,10 @@ struct Workspace {
     projection: project::Projection,
     /// Bodies in an impact this step (the trapezoid update skips them).
     impulsive: Vec<bool>,
+    /// Lemke's guess for this step's LCP (see `carry_guess`), and its
+    /// friction blocks as `(slack, first row, n_d)`.
+    guess: Vec<bool>,
+    slacks: Vec<(usize, usize, usize)>,
 }
 
 impl Workspace {
@@ -116,6 +164,7 @@ pub struct Engine {
 
 impl Engine {
     pub fn new(model: Model) -> Engine {
+        let max_pivots = model.params.lemke_max_pivots;
         let state = State::initial(&model);
         let inputs = Inputs::new(&model);
         Engine {
@@ -125,7 +174,7 @@ impl Engine {
             state,
             inputs,
             ws: Workspace::default(),
-            lemke: Lemke::new(),
+            lemke: Lemke::with_max_pivots(max_pivots),
             prepared: false,
             collision_time: 0.0,
             projected: 0,
@@ -141,7 +190,17 @@ impl Engine {
     }
 
     /// Restores a state (a snapshot taken with `state().clone()`).
-    pub fn set_state(&mut self, state: State) {
+    pub fn set_state(&mut self, mut state: State) {
+        // The guess buffers change length from step to step: keep the ones
+        // that grew during warm-up, so that a restore does not make the
+        // next steps allocate.
+        let mine = &mut self.state;
+        mine.warm_active.clear();
+        mine.warm_active.extend_from_slice(&state.warm_active);
+        mine.warm_lcp.clear();
+        mine.warm_lcp.extend_from_slice(&state.warm_lcp);
+        std::mem::swap(&mut mine.warm_active, &mut state.warm_active);
+        std::mem::swap(&mut mine.warm_lcp, &mut state.warm_lcp);
         self.state = state;
         self.prepared = false;
     }
@@ -382,12 +441,31 @@ impl Engine {
                     (s, _) => s.as_str(),
                 };
                 if !use_pgs {
-                    match self.lemke.solve(&lcp, &mut m.z) {
+                    // The last step's support first, carried over by
+                    // contact identity: a resting or steadily sliding
+                    // contact keeps it, and then no pivoting is needed.
+                    let guessed = if p.skips.lemke_guess
+                        && carry_guess(&self.state, m, &ws.contacts, &mut ws.guess)
+                    {
+                        ws.slacks.clear();
+                        let (nc, nd, rows) = (m.nc, m.nd, m.contact_rows());
+                        ws.slacks
+                            .extend((0..m.nf).map(|f| (rows + f, nc + f * nd, nd)));
+                        self.lemke
+                            .solve_guess(&lcp, &ws.guess, &ws.slacks, &mut m.z)
+                    } else {
+                        None
+                    };
+                    let solved = match guessed {
+                        Some(info) => Ok(info),
+                        None => self.lemke.solve(&lcp, &mut m.z),
+                    };
+                    match solved {
                         Ok(info) => {
                             report.pivots += info.work;
                             report.regularized += usize::from(info.regularized);
                             report.residual = report.residual.max(info.residual);
-                            m.recover(&ws.minv, &ws.nu_free, &mut ws.nu);
+                            m.recover(&ws.nu_free, &mut ws.nu);
                         }
                         // auto: the fallback the step report names.
                         Err(
@@ -405,6 +483,7 @@ impl Engine {
                     {
                         // Warm start: joint impulses and normal impulses by
                         // contact identity from the last step.
+                        m.add_friction_rows(&ws.contacts);
                         m.lambda.clear();
                         m.lambda.resize(m.rows.len(), 0.0);
                         if p.skips.warm_start {
@@ -521,6 +600,16 @@ impl Engine {
         let m = &ws.mlcp;
         ws.impulses.clear();
         self.state.warm_joint.copy_from_slice(&m.p_b);
+        self.state.warm_lcp.clear();
+        let mut friction = m.friction_of.iter().peekable();
+        for (i, &ci) in m.lcp_contacts.iter().enumerate() {
+            let rows = friction.next_if(|&&row| row == i).is_some();
+            self.state.warm_lcp.push((ws.contacts[ci].id, rows));
+        }
+        self.state.warm_active.clear();
+        self.state
+            .warm_active
+            .extend(m.z[..m.lcp_size()].iter().map(|&x| x > 0.0));
         self.state.warm_normal.fill(0.0);
         self.state.warm_friction.fill(Vector3::zeros());
         for (i, &ci) in m.lcp_contacts.iter().enumerate() {
@@ -561,7 +650,12 @@ impl Engine {
             }
             if let Some((f, _)) = friction.next_if(|(_, &row)| row == i) {
                 let base = m.nc + f * nd;
-                let p: Vector3<f64> = (0..nd).map(|j| c.direction(j, nd) * m.z[base + j]).sum();
+                let p: Vector3<f64> = (0..nd)
+                    .map(|j| {
+                        let (cs, sn) = m.direction(j);
+                        (c.t1 * cs + c.t2 * sn) * m.z[base + j]
+                    })
+                    .sum();
                 self.state.warm_friction[c.id] = p;
                 if p != Vector3::zeros() {
                     ws.impulses.push(record(ImpulseKind::Friction, p));

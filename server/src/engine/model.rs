@@ -87,6 +87,10 @@ pub struct Params {
     /// The skips, on by default; off only to measure what they save
     /// (`bench skips`) and to test that they do not change the answer.
     pub skips: Skips,
+    /// A pivot cap for Lemke below its own (`1000 + 50 n`): a step that
+    /// needs more fails with `pivot_limit` (and `auto` solves it with PGS),
+    /// bounding a step's time. None: Lemke's own cap.
+    pub lemke_max_pivots: Option<usize>,
     pub position_update: cosim_shared::PositionUpdate,
 }
 
@@ -99,6 +103,9 @@ pub struct Skips {
     pub frictionless_rows: bool,
     /// PGS starts from the last step's impulses (by contact identity).
     pub warm_start: bool,
+    /// Lemke first tries the last step's support when the LCP has the
+    /// same contacts ([`Lemke::solve_guess`](super::solver::Lemke::solve_guess)).
+    pub lemke_guess: bool,
 }
 
 impl Default for Skips {
@@ -106,6 +113,7 @@ impl Default for Skips {
         Skips {
             frictionless_rows: true,
             warm_start: true,
+            lemke_guess: true,
         }
     }
 }
@@ -237,6 +245,7 @@ impl Model {
                 full: false,
                 sphere_contacts: s.sphere_contacts,
                 skips: Skips::default(),
+                lemke_max_pivots: None,
                 position_update: s.position_update,
             },
             initial,

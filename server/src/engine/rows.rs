@@ -103,6 +103,18 @@ impl Row {
         }
     }
 
+    /// `nu += impulse * self`, for a [`Row::weighted`] row: the bodies'
+    /// velocity change from the row's impulse.
+    pub fn add_to(&self, impulse: f64, nu: &mut [f64]) {
+        for j in [self.a, self.b].into_iter().flatten() {
+            let k = 6 * j.body;
+            for d in 0..3 {
+                nu[k + d] += j.lin[d] * impulse;
+                nu[k + 3 + d] += j.ang[d] * impulse;
+            }
+        }
+    }
+
     /// Delassus entry `G_k^T M^-1 G_l`: nonzero only where the rows share a body.
     pub fn coupling(&self, other: &Row, minv: &[InvMass]) -> f64 {
         self.dot(&other.weighted(minv))

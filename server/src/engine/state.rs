@@ -29,6 +29,11 @@ pub struct State {
     pub warm_normal: Vec<f64>,
     pub warm_friction: Vec<Vector3<f64>>,
     pub warm_joint: Vec<f64>,
+    /// Lemke's guess: the last step's final LCP layout (contact id, whether
+    /// it had friction rows, per normal row) and which unknowns were
+    /// positive. Part of the state for the same reason as the impulses.
+    pub warm_lcp: Vec<(usize, bool)>,
+    pub warm_active: Vec<bool>,
 }
 
 impl State {
@@ -49,6 +54,8 @@ impl State {
             warm_normal: vec![0.0; model.potential_contacts()],
             warm_friction: vec![Vector3::zeros(); model.potential_contacts()],
             warm_joint: vec![0.0; 3 * model.joints.len()],
+            warm_lcp: Vec::new(),
+            warm_active: Vec::new(),
         }
     }
 }

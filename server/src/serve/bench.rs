@@ -309,8 +309,9 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
         "controller" => {
             let patience = Duration::from_secs(30);
             let mut c = cosim_client::when_up(patience, || Controller::join(name, mode))?;
-            while c.next_state(Duration::from_secs(30)).is_ok() {
-                c.send(InputFrame::default())?;
+            let input = InputFrame::default();
+            while c.next_state_ref(Duration::from_secs(30)).is_ok() {
+                c.send(input)?;
             }
             Ok(())
         }
@@ -373,6 +374,7 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
         "cosim-server bench ipc: reference scene, {steps} steps per lockstep row, {cores} cores\n\n"
     ));
     out.push_str("| measurement | steps/s | round trip median (us) | step compute median / mean (us) | overhead per step (us) |\n|---|---|---|---|---|\n");
+    let mut raw_spin = f64::NAN;
     for mode in [WaitMode::Spin, WaitMode::Block] {
         if quick && mode == WaitMode::Block {
             continue;
@@ -385,6 +387,9 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
                 5_000
             },
         )?;
+        if mode == WaitMode::Spin {
+            raw_spin = rt;
+        }
         out.push_str(&format!(
             "| raw iceoryx2 ping-pong, {} | {:.0} | {rt:.2} | - | {rt:.2} |\n",
             mode.as_str(),
@@ -444,14 +449,42 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
             )
         })
         .collect::<String>();
+    // The TCP baseline's blocking wake-ups vary with how idle the cores
+    // are (2,700 to 8,800 steps/s across runs here): the ratio is taken
+    // from medians of three alternating runs of each.
+    let (mut spins, mut tcps) = (Vec::new(), Vec::new());
+    for _ in 0..3 {
+        spins.push(lockstep(1, WaitMode::Spin, steps, None)?.steps_per_s);
+        tcps.push(tcp_lockstep(steps)?.0);
+    }
+    let (spin_med, tcp_med) = (median(&mut spins), median(&mut tcps));
+    let raw = raw_spin;
+    let overheads = rows
+        .iter()
+        .find(|(n, m, _)| *n == 1 && *m == WaitMode::Spin)
+        .map(|(_, _, r)| {
+            format!(
+                "spin, 1 controller: round trip minus the step compute it overlaps (prepare) \
+                 {:.2} us = {:.1}x the raw ping-pong ({raw:.2} us); wall time per step minus \
+                 prepare and finish {:.2} us = {:.1}x\n",
+                r.round_trip_us - r.phases[1],
+                (r.round_trip_us - r.phases[1]) / raw,
+                r.overhead_us,
+                r.overhead_us / raw
+            )
+        })
+        .unwrap_or_default();
     let footer = format!(
-        "\nspin, 1 controller, against TCP: {:.1}x the steps per second\n\n\
+        "\nspin, 1 controller, against TCP: {:.1}x the steps per second in the rows above; \
+         medians of 3 alternating runs: {spin_med:.0} against {tcp_med:.0} steps/s, {:.1}x\n\
+         {overheads}\n\
          Where a step's wall time goes, 1 controller (means, us): control requests at the \
          step boundary, `Engine::prepare` (overlapped with the controller), waiting for the \
          input after it, `Engine::finish`, the inputs and outputs around it, publishing.\n\n\
          | wait | boundary | prepare | wait for input | finish | around finish | publish | wall per step |\n\
          |---|---|---|---|---|---|---|---|\n{phases}",
-        spin1 / tcp
+        spin1 / tcp,
+        spin_med / tcp_med
     );
     if quick {
         out.push_str(&footer);
