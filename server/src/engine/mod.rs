@@ -399,20 +399,25 @@ impl Engine {
         prune::select(&mut ws.contacts, &self.state, &ws.nu_free, p);
         timings.assemble += t0.elapsed().as_secs_f64();
         let mut canonical = false;
+        // The canonical re-solve's problem cut out of the last one (see
+        // `Mlcp::restrict`) instead of built again.
+        let mut restricted = false;
         loop {
             let t0 = Instant::now();
             {
                 let _span = tracing::trace_span!("assemble").entered();
-                ws.mlcp
-                    .build(
-                        model,
-                        &self.state,
-                        &ws.contacts,
-                        &ws.minv,
-                        &ws.nu_free,
-                        model.params.solver == SolverChoice::Pgs,
-                    )
-                    .map_err(StepError::Mlcp)?;
+                if !std::mem::take(&mut restricted) {
+                    ws.mlcp
+                        .build(
+                            model,
+                            &self.state,
+                            &ws.contacts,
+                            &ws.minv,
+                            &ws.nu_free,
+                            model.params.solver == SolverChoice::Pgs,
+                        )
+                        .map_err(StepError::Mlcp)?;
+                }
                 report.regularized += usize::from(ws.mlcp.joint_regularized);
             }
             let t1 = Instant::now();
@@ -556,6 +561,9 @@ impl Engine {
             if !prune::keep_active(&mut ws.contacts, &ws.mlcp.lcp_contacts, &ws.mlcp.z) {
                 return Ok(());
             }
+            let t0 = Instant::now();
+            restricted = ws.mlcp.restrict(&ws.contacts, p);
+            timings.assemble += t0.elapsed().as_secs_f64();
         }
     }
 
