@@ -29,9 +29,50 @@ impl Drop for Peer {
     }
 }
 
+/// Whether this process pinned itself to core 0 (see [`pin_self`]); then
+/// peers are started on the cores [`peer_on`] is given.
+static PINNED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Pins this process's main thread (and so the server thread it starts
+/// later) to core 0 with `taskset`, when there are two cores or more and
+/// the tool exists. Why: spinning lockstep assumes a core per process, and
+/// unpinned, the scheduler's migrations between runs were larger than the
+/// effects measured (a monitor's few percent).
+fn pin_self(cores: usize) -> bool {
+    let ok = cores >= 2
+        && Command::new("taskset")
+            .args(["-p", "-c", "0", &std::process::id().to_string()])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success());
+    PINNED.store(ok, std::sync::atomic::Ordering::Relaxed);
+    ok
+}
+
+/// Every core, as a taskset list.
+fn all_cores() -> String {
+    let n = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("0-{}", n.saturating_sub(1))
+}
+
+/// A peer on core 1 (the one other process of a two-process measurement).
 fn peer(args: &[&str]) -> std::io::Result<Peer> {
-    Command::new(std::env::current_exe()?)
-        .arg("bench-peer")
+    peer_on("1", args)
+}
+
+/// A peer on `cores` (a taskset list) when this process is pinned, else
+/// wherever the scheduler puts it.
+fn peer_on(cores: &str, args: &[&str]) -> std::io::Result<Peer> {
+    let exe = std::env::current_exe()?;
+    let mut cmd = if PINNED.load(std::sync::atomic::Ordering::Relaxed) {
+        let mut c = Command::new("taskset");
+        c.arg("-c").arg(cores).arg(exe);
+        c
+    } else {
+        Command::new(exe)
+    };
+    cmd.arg("bench-peer")
         .args(args)
         .stdout(Stdio::null())
         .stderr(Stdio::inherit())
@@ -225,16 +266,22 @@ fn lockstep(
     // Peers retry until the server's services exist.
     let mut peers = Vec::new();
     for _ in 0..controllers {
-        peers.push(peer(&[
-            "controller",
-            "--name",
-            &name,
-            "--wait",
-            mode.as_str(),
-        ])?);
+        // One controller gets core 1; several share every core.
+        let cores = if controllers == 1 {
+            "1".to_string()
+        } else {
+            all_cores()
+        };
+        peers.push(peer_on(
+            &cores,
+            &["controller", "--name", &name, "--wait", mode.as_str()],
+        )?);
     }
     if let Some(role) = sidecar {
-        peers.push(peer(&[role, "--name", &name, "--wait", "block"])?);
+        peers.push(peer_on(
+            &all_cores(),
+            &[role, "--name", &name, "--wait", "block"],
+        )?);
     }
     let (c, _, _) = server.join().map_err(|_| "the server thread panicked")??;
     // From the first step: the controllers' start-up is not lockstep.
@@ -370,8 +417,14 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
 pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
     let mut out = String::new();
     let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    let pinned = pin_self(cores);
     out.push_str(&format!(
-        "cosim-server bench ipc: reference scene, {steps} steps per lockstep row, {cores} cores\n\n"
+        "cosim-server bench ipc: reference scene, {steps} steps per lockstep row, {cores} cores{}\n\n",
+        if pinned {
+            "; server on core 0, a single controller or peer on core 1, several controllers and the monitor anywhere (taskset)"
+        } else {
+            "; not pinned"
+        }
     ));
     out.push_str("| measurement | steps/s | round trip median (us) | step compute median / mean (us) | overhead per step (us) |\n|---|---|---|---|---|\n");
     let mut raw_spin = f64::NAN;
