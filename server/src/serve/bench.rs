@@ -234,6 +234,8 @@ struct Lockstep {
     /// Means per step (us): boundary, prepare, wait, finish, around the
     /// step, publish.
     phases: [f64; 6],
+    /// Median wall time of a loop iteration (us).
+    median_step_us: f64,
 }
 
 fn lockstep(
@@ -292,6 +294,7 @@ fn lockstep(
     let prepare_mean = c.prepare.mean().unwrap_or(nan);
     let m = |h: &super::stats::Histogram| h.mean().unwrap_or(nan);
     Ok(Lockstep {
+        median_step_us: c.phases.step_wall.quantile(0.5).unwrap_or(nan),
         phases: [
             m(&c.phases.boundary),
             prepare_mean,
@@ -310,7 +313,9 @@ fn lockstep(
 
 /// Lockstep over TCP loopback: the server sends the state frame's bytes,
 /// the controller answers with an input frame's bytes, per step.
-fn tcp_lockstep(steps: u64) -> Result<(f64, f64, f64), BoxError> {
+/// Returns steps per second, the median round trip, the overhead per step
+/// and the median wall time of a step (us).
+fn tcp_lockstep(steps: u64) -> Result<(f64, f64, f64, f64), BoxError> {
     let listener = std::net::TcpListener::bind("127.0.0.1:0")?;
     let port = listener.local_addr()?.port().to_string();
     let _peer = peer(&["tcp", "--name", &port, "--wait", "block"])?;
@@ -321,8 +326,10 @@ fn tcp_lockstep(steps: u64) -> Result<(f64, f64, f64), BoxError> {
     let mut input = vec![0u8; std::mem::size_of::<InputFrame>()];
     let mut times = Vec::with_capacity(steps as usize);
     let mut compute = 0.0;
+    let mut step_walls = Vec::with_capacity(steps as usize);
     let start = Instant::now();
     for _ in 0..steps {
+        let top = Instant::now();
         super::frame::fill(&mut frame, &engine, None);
         let t0 = Instant::now();
         sock.write_all(state_bytes(&frame))?;
@@ -331,10 +338,16 @@ fn tcp_lockstep(steps: u64) -> Result<(f64, f64, f64), BoxError> {
         let t1 = Instant::now();
         engine.step();
         compute += t1.elapsed().as_secs_f64();
+        step_walls.push(top.elapsed().as_secs_f64() * 1e6);
     }
     let wall = start.elapsed().as_secs_f64();
     let over = (wall - compute) / steps as f64 * 1e6;
-    Ok((steps as f64 / wall, median(&mut times), over))
+    Ok((
+        steps as f64 / wall,
+        median(&mut times),
+        over,
+        median(&mut step_walls),
+    ))
 }
 
 fn state_bytes(f: &StateFrame) -> &[u8] {
@@ -449,7 +462,7 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
             1e6 / rt
         ));
     }
-    let (tcp, tcp_rt, tcp_over) = tcp_lockstep(steps)?;
+    let (tcp, tcp_rt, tcp_over, _) = tcp_lockstep(steps)?;
     out.push_str(&format!(
         "| lockstep over TCP loopback, 1 controller | {tcp:.0} | {tcp_rt:.2} | - | {tcp_over:.2} |\n"
     ));
@@ -506,11 +519,18 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
     // are (2,700 to 8,800 steps/s across runs here): the ratio is taken
     // from medians of three alternating runs of each.
     let (mut spins, mut tcps) = (Vec::new(), Vec::new());
+    let (mut spin_steps, mut tcp_steps) = (Vec::new(), Vec::new());
     for _ in 0..3 {
-        spins.push(lockstep(1, WaitMode::Spin, steps, None)?.steps_per_s);
-        tcps.push(tcp_lockstep(steps)?.0);
+        let l = lockstep(1, WaitMode::Spin, steps, None)?;
+        spins.push(l.steps_per_s);
+        spin_steps.push(l.median_step_us);
+        let t = tcp_lockstep(steps)?;
+        tcps.push(t.0);
+        tcp_steps.push(t.3);
     }
     let (spin_med, tcp_med) = (median(&mut spins), median(&mut tcps));
+    // The median step of each run, robust to a run's preemptions.
+    let (spin_step, tcp_step) = (median(&mut spin_steps), median(&mut tcp_steps));
     let raw = raw_spin;
     let overheads = rows
         .iter()
@@ -529,7 +549,8 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
         .unwrap_or_default();
     let footer = format!(
         "\nspin, 1 controller, against TCP: {:.1}x the steps per second in the rows above; \
-         medians of 3 alternating runs: {spin_med:.0} against {tcp_med:.0} steps/s, {:.1}x\n\
+         medians of 3 alternating runs: {spin_med:.0} against {tcp_med:.0} steps/s, {:.1}x; \
+         median step {spin_step:.2} us against {tcp_step:.2} us, {:.1}x\n\
          {overheads}\n\
          Where a step's wall time goes, 1 controller (means, us): control requests at the \
          step boundary, `Engine::prepare` (overlapped with the controller), waiting for the \
@@ -537,7 +558,8 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
          | wait | boundary | prepare | wait for input | finish | around finish | publish | wall per step |\n\
          |---|---|---|---|---|---|---|---|\n{phases}",
         spin1 / tcp,
-        spin_med / tcp_med
+        spin_med / tcp_med,
+        tcp_step / spin_step
     );
     if quick {
         out.push_str(&footer);
@@ -550,15 +572,33 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
         let (mut without, mut with) = (Vec::new(), Vec::new());
         // Runs of twice the steps: at 13 us per step a run of 20,000 is
         // 0.26 s, short enough for a single preemption to show.
+        let (mut step_without, mut step_with) = (Vec::new(), Vec::new());
+        let (mut ph_without, mut ph_with) = ([0.0f64; 6], [0.0f64; 6]);
         for _ in 0..9 {
-            without.push(lockstep(1, mode, 2 * steps, None)?.steps_per_s);
-            with.push(lockstep(1, mode, 2 * steps, Some("monitor"))?.steps_per_s);
+            let l = lockstep(1, mode, 2 * steps, None)?;
+            without.push(l.steps_per_s);
+            step_without.push(l.median_step_us);
+            ph_without
+                .iter_mut()
+                .zip(l.phases)
+                .for_each(|(a, b)| *a += b / 9.0);
+            let l = lockstep(1, mode, 2 * steps, Some("monitor"))?;
+            with.push(l.steps_per_s);
+            step_with.push(l.median_step_us);
+            ph_with
+                .iter_mut()
+                .zip(l.phases)
+                .for_each(|(a, b)| *a += b / 9.0);
         }
         let (a, b) = (median(&mut without), median(&mut with));
+        let (sa, sb) = (median(&mut step_without), median(&mut step_with));
         out.push_str(&format!(
-            "| lockstep, 1 controller, {}: without / with a monitor process (cosim monitor, newest frame at 10 Hz), medians of 9 alternating runs of twice the steps | {a:.0} / {b:.0} ({:+.1} %) | - | - | - |\n",
+            "| lockstep, 1 controller, {}: without / with a monitor process (cosim monitor, newest frame at 10 Hz), medians of 9 alternating runs of twice the steps | {a:.0} / {b:.0} ({:+.1} %); median step {sa:.2} / {sb:.2} us ({:+.1} %); publish phase (the one a subscriber more can cost), mean of the runs, {:.2} / {:.2} us | - | - | - |\n",
             mode.as_str(),
-            (b / a - 1.0) * 100.0
+            (b / a - 1.0) * 100.0,
+            (sb / sa - 1.0) * 100.0,
+            ph_without[5],
+            ph_with[5]
         ));
     }
     for mode in [WaitMode::Spin, WaitMode::Hybrid] {

@@ -147,6 +147,9 @@ pub struct Phases {
     pub wait: stats::Histogram,
     pub around_step: stats::Histogram,
     pub publish: stats::Histogram,
+    /// Wall time of each loop iteration (a step with everything around it):
+    /// its median is robust to the preemptions that move a run's mean.
+    pub step_wall: stats::Histogram,
 }
 
 /// What the control loop decided.
@@ -303,11 +306,18 @@ impl Server {
         }
         let mut pace = Pace::new(self.opts.realtime, self.engine.state().t);
         self.stepping = Some(Instant::now());
+        let mut last_top: Option<Instant> = None;
         loop {
             if terminated() {
                 return Ok(Ending::Signal);
             }
             let t_boundary = Instant::now();
+            if let Some(top) = last_top.replace(t_boundary) {
+                self.c
+                    .phases
+                    .step_wall
+                    .add((t_boundary - top).as_secs_f64() * 1e6);
+            }
             if let Flow::Stop(e) = self.boundary()? {
                 return Ok(e);
             }
