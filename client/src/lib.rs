@@ -346,24 +346,11 @@ impl StateReader {
         Ok(StateReader { sub, ready })
     }
 
-    /// The next frame in the buffer, if any.
-    fn poll(&self) -> Result<Option<StateFrame>, ClientError> {
-        Ok(self
-            .sub
-            .receive()
-            .map_err(|e| ipc("cannot receive the state")(&e))?
-            // The entries in use only: the rest of the 8.5 KB stays in the
-            // server's cache (StateFrame::write_used says why).
-            .map(|s| s.payload().used_copy()))
-    }
-
-    /// The newest frame in the buffer, if any (older ones are dropped).
+    /// The newest frame in the buffer, if any (older ones are dropped
+    /// unread). The entries in use only: the rest of the 8.5 KB stays in
+    /// the server's cache (`UsedEntries::write_used` says why).
     fn latest(&self) -> Result<Option<StateFrame>, ClientError> {
-        let mut last = None;
-        while let Some(f) = self.poll()? {
-            last = Some(f);
-        }
-        Ok(last)
+        Ok(self.receive(true)?.map(|s| s.payload().used_copy()))
     }
 
     /// The next sample in the buffer, or with `newest` the newest one (the
@@ -608,27 +595,7 @@ impl Controller {
 
     /// Sends a frame as it is (tests use it to send bad inputs).
     pub fn send_raw(&mut self, input: &InputFrame) -> Result<(), ClientError> {
-        let mut sample = self
-            .input
-            .loan_uninit()
-            .map_err(|e| ipc("cannot loan an input sample")(&e))?;
-        // SAFETY: the sample's bytes are initialised: the publisher's data
-        // segment is shared memory the OS hands out zero-filled (POSIX
-        // ftruncate), and since then only input frames of this publisher
-        // were written into it. InputFrame is #[repr(C)] plain numbers
-        // (u32, u64, f64, explicit padding: the layout test in wire.rs),
-        // valid for every bit pattern. `write_used` writes every entry that
-        // differs from `input` (the marks in `self.written` cover what
-        // earlier frames left), so the sample holds exactly `input`.
-        let sample = unsafe {
-            sample
-                .payload_mut()
-                .assume_init_mut()
-                .write_used(input, &mut self.written);
-            sample.assume_init()
-        };
-        sample
-            .send()
+        send_used(&self.input, input, &mut self.written)
             .map_err(|e| ipc("cannot send the input")(&e))?;
         // A spinning server needs no wake-up.
         if !self.has_last || self.last.status & STATUS_SERVER_SPINS == 0 {

@@ -260,15 +260,10 @@ pub enum MlcpOutcome {
     /// Schur reduction: `ratio` is the largest over the smallest pivot of
     /// its fully pivoted LU (infinite when a pivot is zero).
     SingularEquality { ratio: f64 },
-    /// Lemke failed on the reduced LCP (`pivot_ratio` of `A` as above).
-    Lemke {
-        error: crate::engine::solver::LemkeError,
-        pivot_ratio: f64,
-    },
-    /// PGS reached its iteration cap on the reduced LCP, at `residual`.
-    NotConverged {
-        iterations: usize,
-        residual: f64,
+    /// The reduced LCP's solver failed (`pivot_ratio` of `A` as above):
+    /// Lemke's ray, pivot limit or breakdown, or PGS at its iteration cap.
+    Failed {
+        failure: LcpFailure,
         pivot_ratio: f64,
     },
 }
@@ -294,14 +289,12 @@ pub fn solve_lcp(
         LcpSolver::Lemke => match Lemke::new().solve_plain(lcp, z) {
             Ok(info) => Ok((info.work, info.residual)),
             Err(e) => {
-                let (status, work) = match e {
-                    LemkeError::RayTermination { pivots, .. } => ("ray_termination", pivots),
-                    LemkeError::PivotLimit { pivots, .. } => ("pivot_limit", pivots),
-                    LemkeError::NumericalBreakdown { pivots, .. } => ("not_converged", pivots),
-                };
-                let residual = match e {
-                    LemkeError::NumericalBreakdown { residual, .. } => Some(residual),
-                    _ => None,
+                let (status, work, residual) = match e {
+                    LemkeError::RayTermination { pivots, .. } => ("ray_termination", pivots, None),
+                    LemkeError::PivotLimit { pivots, .. } => ("pivot_limit", pivots, None),
+                    LemkeError::NumericalBreakdown { pivots, residual } => {
+                        ("not_converged", pivots, Some(residual))
+                    }
                 };
                 Err(LcpFailure {
                     status,
@@ -356,7 +349,7 @@ pub fn solve_mlcp(p: &MlcpProblem) -> MlcpOutcome {
 
 /// [`solve_mlcp`] with the reduced LCP solved by `solver`.
 pub fn solve_mlcp_with(p: &MlcpProblem, solver: LcpSolver) -> MlcpOutcome {
-    use crate::engine::solver::{pgs, Lcp, Lemke};
+    use crate::engine::solver::Lcp;
     use faer::Mat;
     let (n, m) = (p.a.len(), p.b.len());
     let mut pivot_ratio = 1.0;
@@ -402,21 +395,13 @@ pub fn solve_mlcp_with(p: &MlcpProblem, solver: LcpSolver) -> MlcpOutcome {
         m: &mm,
         q: &q,
     };
-    let work = match solver {
-        LcpSolver::Lemke => match Lemke::new().solve_plain(&lcp, &mut v) {
-            Ok(info) => info.work,
-            Err(error) => return MlcpOutcome::Lemke { error, pivot_ratio },
-        },
-        LcpSolver::Pgs(params) => {
-            let info = pgs::solve_dense(&lcp, &params, &mut v);
-            if !info.converged {
-                return MlcpOutcome::NotConverged {
-                    iterations: info.iterations,
-                    residual: info.residual,
-                    pivot_ratio,
-                };
+    let work = match solve_lcp(solver, &lcp, &mut v) {
+        Ok((work, _)) => work,
+        Err(failure) => {
+            return MlcpOutcome::Failed {
+                failure,
+                pivot_ratio,
             }
-            info.iterations
         }
     };
     let u: Vec<f64> = (0..n)

@@ -9,7 +9,7 @@
 //! another version fails when it opens the service, with iceoryx2's
 //! "incompatible types" error, instead of misreading bytes.
 
-use iceoryx2::prelude::ZeroCopySend;
+use iceoryx2::prelude::{ipc, IceoryxSend, ZeroCopySend};
 
 /// Version of the wire types (also in every `type_name`).
 pub const PROTOCOL_VERSION: u32 = 1;
@@ -233,7 +233,7 @@ impl StateFrame {
 
 /// High-water marks of the entries written into the frames of one pool of
 /// samples (one publisher's, or one local frame): see
-/// [`StateFrame::write_used`].
+/// [`UsedEntries::write_used`].
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct Written {
     pub bodies: usize,
@@ -253,16 +253,57 @@ fn write_prefix<T: Copy + Default>(dst: &mut [T], src: &[T], n: usize, mark: &mu
     *mark = (*mark).max(n);
 }
 
-impl StateFrame {
+/// A frame whose arrays are used up to its counts (the state and input
+/// frames), copied by the entries in use.
+pub trait UsedEntries: Default + Sized {
     /// Makes `self` equal to `src` where `src`'s entries past its counts
     /// are zero (every frame this crate builds), writing only the header,
     /// the entries in use and the stale entries `written` says earlier
     /// frames left (its marks cover every frame ever written into this
-    /// memory, which started zeroed). Why: a full copy is 8.5 KB, 133 cache
-    /// lines; a reader on another core that copied the last frame holds
-    /// them all, and writing them back costs a cross-core transfer each
-    /// (measured: 5.3 us of a 7 us publish on this machine).
-    pub fn write_used(&mut self, src: &StateFrame, written: &mut Written) {
+    /// memory, which started zeroed). Why: a full state frame is 8.5 KB,
+    /// 133 cache lines; a reader on another core that copied the last frame
+    /// holds them all, and writing them back costs a cross-core transfer
+    /// each (measured: 5.3 us of a 7 us publish on this machine).
+    fn write_used(&mut self, src: &Self, written: &mut Written);
+
+    /// A local copy of the entries in use (the rest default): what a
+    /// reader needs, without pulling the whole frame across cores.
+    fn used_copy(&self) -> Self {
+        let mut f = Self::default();
+        f.write_used(self, &mut Written::default());
+        f
+    }
+}
+
+/// Sends `frame` on `publisher`, writing only its entries in use into the
+/// loaned sample ([`UsedEntries::write_used`]); `written` holds the marks
+/// of that publisher's samples.
+pub fn send_used<T: UsedEntries + IceoryxSend + ZeroCopySend + core::fmt::Debug>(
+    publisher: &iceoryx2::port::publisher::Publisher<ipc::Service, T, ()>,
+    frame: &T,
+    written: &mut Written,
+) -> Result<usize, iceoryx2::port::SendError> {
+    let mut sample = publisher.loan_uninit()?;
+    // SAFETY: the sample's bytes are initialised: the publisher's data
+    // segment is shared memory the OS hands out zero-filled (POSIX
+    // ftruncate), and since then only frames of this publisher were written
+    // into it. The frames are #[repr(C)] plain numbers (u32, u64, f64,
+    // explicit padding: the layout test below), valid for every bit
+    // pattern. `write_used` then writes every entry that differs from
+    // `frame` (the marks in `written` cover what earlier frames left), so
+    // the sample holds exactly `frame`.
+    let sample = unsafe {
+        sample
+            .payload_mut()
+            .assume_init_mut()
+            .write_used(frame, written);
+        sample.assume_init()
+    };
+    sample.send()
+}
+
+impl UsedEntries for StateFrame {
+    fn write_used(&mut self, src: &StateFrame, written: &mut Written) {
         // Exhaustive: a field added to the frame must be added here.
         let &StateFrame {
             version,
@@ -317,14 +358,6 @@ impl StateFrame {
             contact_count as usize,
             &mut written.contacts,
         );
-    }
-
-    /// A local copy of the entries in use (the rest default): what a
-    /// reader needs, without pulling the whole frame across cores.
-    pub fn used_copy(&self) -> StateFrame {
-        let mut f = StateFrame::default();
-        f.write_used(self, &mut Written::default());
-        f
     }
 }
 
@@ -397,10 +430,10 @@ impl Default for InputFrame {
     }
 }
 
-impl InputFrame {
-    /// As [`StateFrame::write_used`]: the header and the torques and
-    /// impulses in use (`written.joints` and `written.bodies` mark them).
-    pub fn write_used(&mut self, src: &InputFrame, written: &mut Written) {
+impl UsedEntries for InputFrame {
+    /// The header and the torques and impulses in use (`written.joints`
+    /// and `written.bodies` mark them).
+    fn write_used(&mut self, src: &InputFrame, written: &mut Written) {
         let &InputFrame {
             version,
             controller_id,
@@ -430,14 +463,9 @@ impl InputFrame {
             &mut written.bodies,
         );
     }
+}
 
-    /// A local copy of the entries in use (the rest default).
-    pub fn used_copy(&self) -> InputFrame {
-        let mut f = InputFrame::default();
-        f.write_used(self, &mut Written::default());
-        f
-    }
-
+impl InputFrame {
     /// Appends a joint torque; false when the frame is full.
     pub fn push_torque(&mut self, joint: u32, torque: [f64; 3]) -> bool {
         let i = self.torque_count as usize;

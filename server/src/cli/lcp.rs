@@ -55,21 +55,8 @@ pub fn lcp(args: &LcpArgs) -> ExitCode {
             MlcpOutcome::SingularEquality { ratio } => {
                 json!({"file": file, "status": "singular", "solver": name, "pivot_ratio": if ratio.is_finite() { json!(ratio) } else { json!("inf") }})
             }
-            MlcpOutcome::Lemke { error, .. } => {
-                let status = match error {
-                    crate::engine::solver::LemkeError::RayTermination { .. } => "ray_termination",
-                    crate::engine::solver::LemkeError::PivotLimit { .. } => "pivot_limit",
-                    crate::engine::solver::LemkeError::NumericalBreakdown { .. } => "not_converged",
-                };
-                json!({"file": file, "status": status, "solver": name, "message": error.to_string()})
-            }
-            MlcpOutcome::NotConverged {
-                iterations,
-                residual,
-                ..
-            } => {
-                json!({"file": file, "status": "not_converged", "solver": name, work: iterations, "residual": residual,
-                       "message": format!("no convergence: residual {residual:.3e} after {iterations} sweeps")})
+            MlcpOutcome::Failed { failure: f, .. } => {
+                json!({"file": file, "status": f.status, "solver": name, work: f.work, "residual": f.residual, "message": f.message})
             }
         }
     } else {

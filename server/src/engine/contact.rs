@@ -27,11 +27,18 @@ pub struct Contact {
     pub in_lcp: bool,
 }
 
+/// `(cos, sin)` of friction direction `j` of `n_d`: `d_j = cos t1 + sin t2`.
+/// The one definition the rows, the LCP's expansion and PGS share.
+pub fn direction_coefficients(j: usize, nd: usize) -> (f64, f64) {
+    let angle = std::f64::consts::TAU * j as f64 / nd as f64;
+    (angle.cos(), angle.sin())
+}
+
 impl Contact {
     /// Friction direction `j` of `n_d`.
     pub fn direction(&self, j: usize, nd: usize) -> Vector3<f64> {
-        let angle = std::f64::consts::TAU * j as f64 / nd as f64;
-        self.t1 * angle.cos() + self.t2 * angle.sin()
+        let (c, s) = direction_coefficients(j, nd);
+        self.t1 * c + self.t2 * s
     }
 
     pub fn has_friction(&self) -> bool {

@@ -267,11 +267,8 @@ impl Mlcp {
         let nd = p.friction_directions;
         if self.dirs.len() != nd {
             self.dirs.clear();
-            self.dirs.extend((0..nd).map(|j| {
-                // As Contact::direction computes it.
-                let angle = std::f64::consts::TAU * j as f64 / nd as f64;
-                (angle.cos(), angle.sin())
-            }));
+            self.dirs
+                .extend((0..nd).map(|j| super::contact::direction_coefficients(j, nd)));
         }
         self.rows.clear();
         self.basis.clear();

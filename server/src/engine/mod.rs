@@ -609,11 +609,6 @@ impl Engine {
         ws.impulses.clear();
         self.state.warm_joint.copy_from_slice(&m.p_b);
         self.state.warm_lcp.clear();
-        let mut friction = m.friction_of.iter().peekable();
-        for (i, &ci) in m.lcp_contacts.iter().enumerate() {
-            let rows = friction.next_if(|&&row| row == i).is_some();
-            self.state.warm_lcp.push((ws.contacts[ci].id, rows));
-        }
         self.state.warm_active.clear();
         self.state
             .warm_active
@@ -656,7 +651,9 @@ impl Engine {
                 ws.impulses
                     .push(record(ImpulseKind::Normal, c.geom.normal * m.z[i]));
             }
-            if let Some((f, _)) = friction.next_if(|(_, &row)| row == i) {
+            let block = friction.next_if(|(_, &row)| row == i);
+            self.state.warm_lcp.push((c.id, block.is_some()));
+            if let Some((f, _)) = block {
                 let base = m.nc + f * nd;
                 let p: Vector3<f64> = (0..nd)
                     .map(|j| {

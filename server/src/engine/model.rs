@@ -103,8 +103,8 @@ pub struct Skips {
     pub frictionless_rows: bool,
     /// PGS starts from the last step's impulses (by contact identity).
     pub warm_start: bool,
-    /// Lemke first tries the last step's support when the LCP has the
-    /// same contacts ([`Lemke::solve_guess`](super::solver::Lemke::solve_guess)).
+    /// Lemke first tries the last step's support, carried over by contact
+    /// identity ([`Lemke::solve_guess`](super::solver::Lemke::solve_guess)).
     pub lemke_guess: bool,
 }
 

@@ -531,19 +531,18 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
     let (spin_med, tcp_med) = (median(&mut spins), median(&mut tcps));
     // The median step of each run, robust to a run's preemptions.
     let (spin_step, tcp_step) = (median(&mut spin_steps), median(&mut tcp_steps));
-    let raw = raw_spin;
     let overheads = rows
         .iter()
         .find(|(n, m, _)| *n == 1 && *m == WaitMode::Spin)
         .map(|(_, _, r)| {
             format!(
                 "spin, 1 controller: round trip minus the step compute it overlaps (prepare) \
-                 {:.2} us = {:.1}x the raw ping-pong ({raw:.2} us); wall time per step minus \
+                 {:.2} us = {:.1}x the raw ping-pong ({raw_spin:.2} us); wall time per step minus \
                  prepare and finish {:.2} us = {:.1}x\n",
                 r.round_trip_us - r.phases[1],
-                (r.round_trip_us - r.phases[1]) / raw,
+                (r.round_trip_us - r.phases[1]) / raw_spin,
                 r.overhead_us,
-                r.overhead_us / raw
+                r.overhead_us / raw_spin
             )
         })
         .unwrap_or_default();

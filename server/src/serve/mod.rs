@@ -353,9 +353,8 @@ impl Server {
                 self.publish()?;
                 continue;
             }
-            self.take_step(k)?;
+            let compute = self.take_step(k)?;
             let t_publish = Instant::now();
-            let compute = self.c.step_compute.last_us();
             self.c
                 .phases
                 .around_step
@@ -584,7 +583,8 @@ impl Server {
     }
 
     /// The net inputs into the engine, the step, the outputs.
-    fn take_step(&mut self, k: u64) -> Result<(), ServeError> {
+    /// Returns the engine's compute time (us).
+    fn take_step(&mut self, k: u64) -> Result<f64, ServeError> {
         for j in 0..self.engine.model().joints.len() {
             let t = controllers::net_torque(&self.slots, j, self.scene_torque[j]);
             if t != self.applied[j] {
@@ -614,7 +614,8 @@ impl Server {
         self.slots.retain(|s| !s.leaving);
         let t0 = Instant::now();
         let report = self.engine.finish();
-        self.c.step_compute.add(t0.elapsed().as_secs_f64() * 1e6);
+        let compute = t0.elapsed().as_secs_f64() * 1e6;
+        self.c.step_compute.add(compute);
         if let Some(f) = self.files.as_mut() {
             f.logs.step(k, frame::state_hash(&self.engine))?;
         }
@@ -647,7 +648,7 @@ impl Server {
                 f.logs.flush()?;
             }
         }
-        Ok(())
+        Ok(compute)
     }
 
     fn respond(&self, req: &Request, mut r: ControlResponse) {

@@ -3,7 +3,8 @@
 //! the server's to fix.
 
 use cosim_shared::wire::{
-    services, ControlRequest, ControlResponse, InputFrame, StateFrame, Written,
+    send_used, services, ControlRequest, ControlResponse, InputFrame, StateFrame, UsedEntries,
+    Written,
 };
 use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::port::listener::Listener;
@@ -180,27 +181,7 @@ impl Services {
 
     /// Publishes a frame and wakes the blocked readers.
     pub fn publish(&mut self, frame: &StateFrame) -> Result<(), ServiceError> {
-        let mut sample = self
-            .state
-            .loan_uninit()
-            .map_err(|e| err("cannot loan a state sample".into())(&e))?;
-        // SAFETY: the sample's bytes are initialised: the publisher's data
-        // segment is shared memory the OS hands out zero-filled (POSIX
-        // ftruncate), and since then only frames of this publisher were
-        // written into it. StateFrame is #[repr(C)] plain numbers (u32,
-        // u64, f64, explicit padding: the layout test in wire.rs), valid
-        // for every bit pattern. `write_used` then writes every entry that
-        // differs from `frame` (the marks in `self.written` cover what
-        // earlier frames left), so the sample holds exactly `frame`.
-        let sample = unsafe {
-            sample
-                .payload_mut()
-                .assume_init_mut()
-                .write_used(frame, &mut self.written);
-            sample.assume_init()
-        };
-        sample
-            .send()
+        send_used(&self.state, frame, &mut self.written)
             .map_err(|e| err("cannot publish the state".into())(&e))?;
         // NOTE: after the send: a reader that polled before the frame
         // landed finds the event pending.

@@ -15,7 +15,6 @@ pub struct Histogram {
     counts: Box<[u64]>,
     n: u64,
     sum: f64,
-    last: f64,
 }
 
 impl Default for Histogram {
@@ -24,7 +23,6 @@ impl Default for Histogram {
             counts: vec![0; BUCKETS].into_boxed_slice(),
             n: 0,
             sum: 0.0,
-            last: 0.0,
         }
     }
 }
@@ -37,12 +35,6 @@ impl Histogram {
         self.counts[i] += 1;
         self.n += 1;
         self.sum += us;
-        self.last = us;
-    }
-
-    /// The value added last (0 before the first).
-    pub fn last_us(&self) -> f64 {
-        self.last
     }
 
     pub fn len(&self) -> u64 {

@@ -227,9 +227,7 @@ impl Lemke {
             }
             let mut s = 0.0f64;
             for j in first..first + count {
-                let row = &lcp.m[j * n..(j + 1) * n];
-                let w = lcp.q[j] + row.iter().zip(&z[..n]).map(|(a, b)| a * b).sum::<f64>();
-                s = s.max(-w);
+                s = s.max(-super::row_slack(lcp, &z[..n], j));
             }
             z[si] = s;
         }

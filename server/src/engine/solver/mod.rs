@@ -30,11 +30,16 @@ pub struct SolveInfo {
     pub residual: f64,
 }
 
+/// `w_i = (M z + q)_i`.
+pub fn row_slack(lcp: &Lcp, z: &[f64], i: usize) -> f64 {
+    let row = &lcp.m[i * lcp.n..(i + 1) * lcp.n];
+    lcp.q[i] + row.iter().zip(z).map(|(a, b)| a * b).sum::<f64>()
+}
+
 /// `w = M z + q`.
 pub fn slack(lcp: &Lcp, z: &[f64], w: &mut [f64]) {
     for (i, wi) in w.iter_mut().enumerate().take(lcp.n) {
-        let row = &lcp.m[i * lcp.n..(i + 1) * lcp.n];
-        *wi = lcp.q[i] + row.iter().zip(z).map(|(a, b)| a * b).sum::<f64>();
+        *wi = row_slack(lcp, z, i);
     }
 }
 
@@ -44,8 +49,7 @@ pub fn slack(lcp: &Lcp, z: &[f64], w: &mut [f64]) {
 pub fn relative_residual(lcp: &Lcp, z: &[f64]) -> f64 {
     let mut sum = 0.0;
     for i in 0..lcp.n {
-        let row = &lcp.m[i * lcp.n..(i + 1) * lcp.n];
-        let w = lcp.q[i] + row.iter().zip(z).map(|(a, b)| a * b).sum::<f64>();
+        let w = row_slack(lcp, z, i);
         if !(w.is_finite() && z[i].is_finite()) {
             return f64::INFINITY;
         }

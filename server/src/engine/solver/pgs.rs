@@ -22,6 +22,7 @@
 
 use super::Lcp;
 use crate::engine::applied::InvMass;
+use crate::engine::contact::direction_coefficients as direction;
 use crate::engine::rows::Row;
 
 /// Default stopping tolerance on the relative residual.
@@ -77,12 +78,6 @@ pub struct PgsInfo {
     pub residual: f64,
     /// Whether the tolerance stopped it (else the iteration cap).
     pub converged: bool,
-}
-
-/// `(cos, sin)` of friction direction `j` of `n_d`.
-fn direction(j: usize, nd: usize) -> (f64, f64) {
-    let a = std::f64::consts::TAU * j as f64 / nd as f64;
-    (a.cos(), a.sin())
 }
 
 /// The point of the polygon with vertices `cap d_j` (the polyhedral cone at
@@ -244,12 +239,11 @@ pub fn solve_dense(lcp: &Lcp, params: &PgsParams, z: &mut [f64]) -> PgsInfo {
     }
     for it in 1..=params.max_iterations.max(1) {
         for i in 0..n {
-            let row = &lcp.m[i * n..(i + 1) * n];
-            let d = row[i];
+            let d = lcp.m[i * n + i];
             if d <= 0.0 {
                 continue;
             }
-            let w = lcp.q[i] + row.iter().zip(z.iter()).map(|(a, b)| a * b).sum::<f64>();
+            let w = super::row_slack(lcp, &z[..n], i);
             z[i] = (z[i] - params.relaxation * w / d).max(0.0);
         }
         if it % CHECK_EVERY == 0 || it == params.max_iterations {
