@@ -221,6 +221,12 @@ impl Lemke {
             }
             z[i] = b[t];
         }
+        // A sliding speed at the round-off of the data is a sticking
+        // contact: filled in as 1e-19 it marks the slack active, the next
+        // step's guess then carries the wrong support and fails (measured on
+        // the reference scene: every other resting step fell back to a full
+        // Lemke run of 11-13 pivots). Lemke snaps `q` at the same bound.
+        let snap = Q_SNAP * lcp.q.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
         for &(si, first, count) in slacks {
             if active.get(si) != Some(&false) || first + count > n {
                 continue;
@@ -229,7 +235,7 @@ impl Lemke {
             for j in first..first + count {
                 s = s.max(-super::row_slack(lcp, &z[..n], j));
             }
-            z[si] = s;
+            z[si] = if s > snap { s } else { 0.0 };
         }
         let residual = relative_residual(lcp, &z[..n]);
         (residual <= VERIFY_TOL).then_some(SolveInfo {
