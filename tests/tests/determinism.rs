@@ -63,3 +63,57 @@ fn restoring_a_snapshot_replays_pgs_too() {
     }
     assert_eq!(e.state(), &end);
 }
+
+/// The lockstep server makes the mLCP's matrix in `Engine::prepare`, before
+/// the inputs arrive, for the contacts the held inputs would select; the
+/// step keeps it, cuts it down or builds afresh. None of that may change a
+/// bit: `prepare` + `finish` against `step` on the same inputs, with
+/// torques that change every step and kicks that throw the spheres into
+/// contacts the prediction left out (both paths must occur), for each
+/// solver.
+#[test]
+fn the_matrix_made_before_the_inputs_changes_no_bit() {
+    use cosim_shared::SolverChoice;
+    use nalgebra::Vector3;
+    let scene = scenes::reference().expect("built-in scene");
+    for solver in [SolverChoice::Lemke, SolverChoice::Pgs, SolverChoice::Auto] {
+        let mut model = Model::from_scene(&scene);
+        model.params.solver = solver;
+        let (mut early, mut plain) = (Engine::new(model.clone()), Engine::new(model));
+        let (mut kept, mut missed) = (0, 0);
+        for k in 0..3000u64 {
+            early.prepare();
+            // A torque that changes every step, and every 97 steps a kick
+            // of either sphere down into the floor.
+            let phase = k as f64 * 0.37;
+            let torque = Vector3::new(phase.sin(), (2.0 * phase).cos(), 0.3 * phase.sin());
+            let kick =
+                (k % 97 == 0).then(|| ((k / 97) as usize % 2, Vector3::new(20.0, -15.0, -40.0)));
+            for e in [&mut early, &mut plain] {
+                e.set_joint_torque(0, torque * 0.5).expect("joint 0");
+                e.set_joint_torque(1, -torque * 0.2).expect("joint 1");
+                if let Some((body, p)) = kick {
+                    e.add_body_impulse(body, p, Vector3::zeros()).expect("body");
+                }
+            }
+            let (a, b) = (early.finish(), plain.step());
+            assert_eq!(a.error, b.error, "{solver:?} step {k}");
+            assert_eq!(early.state(), plain.state(), "{solver:?} step {k}");
+            assert_eq!(
+                (a.pivots, a.lcp_size),
+                (b.pivots, b.lcp_size),
+                "{solver:?} step {k}"
+            );
+            assert!(!b.early_matrix, "step() makes no early matrix");
+            if a.contacts_in_lcp > 0 {
+                if a.early_matrix {
+                    kept += 1;
+                } else {
+                    missed += 1;
+                }
+            }
+        }
+        assert!(kept > 1000, "{solver:?}: early matrix used {kept} times");
+        assert!(missed > 0, "{solver:?}: the prediction never missed");
+    }
+}

@@ -239,6 +239,19 @@ pub struct Mlcp {
     /// Impulses of every row (joint, normal, friction): the iterative
     /// solver's unknowns.
     pub lambda: Vec<f64>,
+    /// `Some(matrix_free)` while the matrix part is that of the current
+    /// positions and `lcp_contacts` (see [`Mlcp::matrix_for`]).
+    matrix_of: Option<bool>,
+}
+
+/// How [`Mlcp::matrix_for`] came by the matrix.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Assembly {
+    /// Made earlier in the step (`Engine::prepare`) for the same contacts.
+    Kept,
+    /// Cut down from one made for more contacts.
+    Restricted,
+    Built,
 }
 
 impl Mlcp {
@@ -252,17 +265,63 @@ impl Mlcp {
         self.contact_rows() + self.nf
     }
 
-    /// Builds the rows, the Delassus matrix and the reduced LCP for the
-    /// contacts marked `in_lcp`.
-    pub fn build(
+    /// Forgets the matrix part: the positions (hence the rows) changed.
+    pub fn invalidate(&mut self) {
+        self.matrix_of = None;
+    }
+
+    /// Makes the matrix part for the contacts marked `in_lcp`: kept when it
+    /// was made at these positions for exactly those contacts, cut down by
+    /// [`Mlcp::restrict`] when they are fewer, built afresh otherwise. The
+    /// right-hand side is [`Mlcp::rhs`]'s.
+    ///
+    /// Why: the matrix depends on the positions and the contact set, not on
+    /// the inputs, so the lockstep server makes it while the controllers
+    /// compute (`Engine::prepare`, on the contacts its predicted free
+    /// velocity selects); the step then only checks that the inputs selected
+    /// the same contacts. Every number is computed by the same operations on
+    /// the same rows whichever way it was made, so the step's bits do not
+    /// depend on it.
+    pub fn matrix_for(
         &mut self,
         model: &Model,
         state: &State,
         contacts: &[Contact],
         minv: &[InvMass],
-        nu_free: &[f64],
+        matrix_free: bool,
+    ) -> Result<Assembly, MlcpError> {
+        if self.matrix_of == Some(matrix_free) {
+            let selected = contacts.iter().filter(|c| c.in_lcp).count();
+            let kept = self
+                .lcp_contacts
+                .iter()
+                .filter(|&&ci| contacts.get(ci).is_some_and(|c| c.in_lcp))
+                .count();
+            if kept == selected {
+                if kept == self.lcp_contacts.len() {
+                    return Ok(Assembly::Kept);
+                }
+                if !matrix_free && self.restrict(contacts) {
+                    return Ok(Assembly::Restricted);
+                }
+            }
+        }
+        self.build_matrix(model, state, contacts, minv, matrix_free)?;
+        Ok(Assembly::Built)
+    }
+
+    /// The rows, the Delassus matrix, the joint factor and (unless
+    /// `matrix_free`) the reduced LCP's matrix for the contacts marked
+    /// `in_lcp`: everything but the right-hand side.
+    fn build_matrix(
+        &mut self,
+        model: &Model,
+        state: &State,
+        contacts: &[Contact],
+        minv: &[InvMass],
         matrix_free: bool,
     ) -> Result<(), MlcpError> {
+        self.matrix_of = None;
         let p = &model.params;
         let nd = p.friction_directions;
         if self.dirs.len() != nd {
@@ -272,7 +331,6 @@ impl Mlcp {
         }
         self.rows.clear();
         self.basis.clear();
-        self.b.clear();
         self.offset.clear();
         self.lcp_contacts.clear();
         self.friction_of.clear();
@@ -285,7 +343,6 @@ impl Mlcp {
             let psi = pa - pb;
             for k in 0..3 {
                 let row = Row::along(Vector3::ith(k, 1.0), ra, rb);
-                self.b.push(row.velocity(nu_free) + p.beta * psi[k] / p.h);
                 self.offset.push(p.beta * psi[k] / p.h);
                 self.rows.push(row);
             }
@@ -295,7 +352,6 @@ impl Mlcp {
         // Normal rows, then friction rows where mu > 0.
         for (ci, c) in contacts.iter().enumerate().filter(|(_, c)| c.in_lcp) {
             let row = Row::contact(c, c.geom.normal);
-            self.b.push(row.velocity(nu_free));
             self.rows.push(row);
             self.lcp_contacts.push(ci);
         }
@@ -305,9 +361,7 @@ impl Mlcp {
             let c = &contacts[self.lcp_contacts[i]];
             if c.has_friction() || !p.skips.frictionless_rows {
                 for t in [c.t1, c.t2] {
-                    let row = Row::contact(c, t);
-                    self.b.push(row.velocity(nu_free));
-                    self.basis.push(row);
+                    self.basis.push(Row::contact(c, t));
                 }
                 self.friction_of.push(i);
                 self.mu.push(c.mu);
@@ -345,11 +399,39 @@ impl Mlcp {
         self.fill_coeffs();
         self.reduce_joints()?;
         if matrix_free {
-            self.form_rhs(contacts, p);
+            self.lcp_m.clear();
         } else {
-            self.form_lcp(contacts, p);
+            self.form_matrix();
         }
+        self.matrix_of = Some(matrix_free);
         Ok(())
+    }
+
+    /// The right-hand side for the free velocity `nu_free`, on the matrix
+    /// part made by [`Mlcp::matrix_for`]: `b` (`G^T nu_free`, plus
+    /// `beta psi_b / h` on the joint rows), `y_b = L^-1 b_b` and the LCP's
+    /// `q` with the normal offsets.
+    pub fn rhs(&mut self, nu_free: &[f64], contacts: &[Contact], p: &Params) {
+        let nb = self.nb;
+        self.b.clear();
+        for (k, row) in self.basis.iter().enumerate() {
+            let v = row.velocity(nu_free);
+            self.b.push(if k < nb { v + self.offset[k] } else { v });
+        }
+        self.yb.clear();
+        self.yb.extend_from_slice(&self.b[..nb]);
+        if nb > 0 {
+            if nb <= SMALL_BLOCK {
+                small::solve_lower(&self.chol, nb, &mut self.yb);
+            } else {
+                solve_lower_triangular_in_place(
+                    MatRef::from_column_major_slice(&self.chol, nb, nb),
+                    MatMut::from_column_major_slice_mut(&mut self.yb, nb, 1),
+                    Par::Seq,
+                );
+            }
+        }
+        self.form_rhs(contacts, p);
     }
 
     /// Fills [`Mlcp::coeffs`]: contact row `i` of the LCP (normal rows,
@@ -372,13 +454,12 @@ impl Mlcp {
         self.dirs[j]
     }
 
-    /// Factors `A_bb` and forms `Y = L^-1 A_bc`, `y_b = L^-1 b_b`.
+    /// Factors `A_bb` and forms `Y = L^-1 A_bc`.
     fn reduce_joints(&mut self) -> Result<(), MlcpError> {
         let (nb, r) = (self.nb, self.basis.len());
         let m = r - nb;
         self.chol.clear();
         self.y.clear();
-        self.yb.clear();
         self.joint_regularized = false;
         if nb == 0 {
             return Ok(());
@@ -388,7 +469,6 @@ impl Mlcp {
                 self.y.push(self.w[i * r + nb + j]);
             }
         }
-        self.yb.extend_from_slice(&self.b[..nb]);
         let max_diag = (0..nb).fold(0.0f64, |a, i| a.max(self.w[i * r + i]));
 
         if nb > SMALL_BLOCK && self.mem.as_ref().is_none_or(|(cap, _)| *cap < nb) {
@@ -456,22 +536,13 @@ impl Mlcp {
         }
         if nb <= SMALL_BLOCK {
             small::solve_lower(&self.chol, nb, &mut self.y);
-            small::solve_lower(&self.chol, nb, &mut self.yb);
-            return Ok(());
-        }
-        let l = MatRef::from_column_major_slice(&self.chol, nb, nb);
-        if m > 0 {
+        } else if m > 0 {
             solve_lower_triangular_in_place(
-                l,
+                MatRef::from_column_major_slice(&self.chol, nb, nb),
                 MatMut::from_column_major_slice_mut(&mut self.y, nb, m),
                 Par::Seq,
             );
         }
-        solve_lower_triangular_in_place(
-            l,
-            MatMut::from_column_major_slice_mut(&mut self.yb, nb, 1),
-            Par::Seq,
-        );
         Ok(())
     }
 
@@ -488,7 +559,6 @@ impl Mlcp {
             let schur: f64 = yi.iter().zip(&self.yb).map(|(a, b)| a * b).sum();
             self.qb.push(self.b[nb + i] - schur);
         }
-        self.lcp_m.clear();
         self.lcp_q.clear();
         self.lcp_q.resize(n, 0.0);
         for (q, &(k1, c1, k2, c2)) in self.lcp_q.iter_mut().zip(&self.coeffs) {
@@ -503,11 +573,9 @@ impl Mlcp {
         }
     }
 
-    /// Forms the pure LCP: `q` as [`Mlcp::form_rhs`] does, the matrix from
-    /// `W - Y^T Y` on the basis (in `self.sb`), expanded, with `E`, `-E^T`
-    /// and `U`.
-    fn form_lcp(&mut self, contacts: &[Contact], p: &Params) {
-        self.form_rhs(contacts, p);
+    /// Forms the pure LCP's matrix from `W - Y^T Y` on the basis (in
+    /// `self.sb`), expanded, with `E`, `-E^T` and `U`.
+    fn form_matrix(&mut self) {
         let (nb, r) = (self.nb, self.basis.len());
         let mb = r - nb;
         let m = self.contact_rows();
@@ -534,6 +602,7 @@ impl Mlcp {
                 *out = cj1 * sk[kj1] + cj2 * sk[kj2];
             }
         }
+        self.lcp_m.clear();
         self.lcp_m.resize(n * n, 0.0);
         for (i, &(ki1, ci1, ki2, ci2)) in self.coeffs.iter().enumerate() {
             let (t1, t2) = (&self.sc[ki1 * m..][..m], &self.sc[ki2 * m..][..m]);
@@ -599,11 +668,11 @@ impl Mlcp {
     /// what was computed for the rest: rows, `M^-1 B`, the Delassus entries,
     /// the joint factor and the columns of `Y`. Every kept number is computed
     /// from its own rows alone (a dot of two rows, one triangular solve per
-    /// column), so the result is bit for bit what `build` gives on the same
-    /// contacts; then the LCP is formed again. False (nothing changed: build
-    /// afresh) where that does not hold: joint blocks factored by faer's
-    /// blocked kernels, or friction rows already added for PGS.
-    pub fn restrict(&mut self, contacts: &[Contact], p: &Params) -> bool {
+    /// column), so the result is bit for bit what `build_matrix` gives on the
+    /// same contacts; then the LCP's matrix is formed again. False (nothing
+    /// changed: build afresh) where that does not hold: joint blocks factored
+    /// by faer's blocked kernels, or friction rows already added for PGS.
+    fn restrict(&mut self, contacts: &[Contact]) -> bool {
         let (nb, nc) = (self.nb, self.nc);
         if nb > SMALL_BLOCK || self.rows.len() != nb + nc || self.lcp_m.is_empty() {
             return false;
@@ -638,10 +707,6 @@ impl Mlcp {
         };
         select(&mut self.basis, &self.kept);
         select(&mut self.weighted, &self.kept);
-        for (t, &k) in self.kept.iter().enumerate() {
-            self.b[nb + t] = self.b[nb + k];
-        }
-        self.b.truncate(nb + self.kept.len());
         let new_r = nb + self.kept.len();
         let old = |i: usize| if i < nb { i } else { nb + self.kept[i - nb] };
         self.w_cut.clear();
@@ -685,7 +750,7 @@ impl Mlcp {
         self.offset.truncate(nb);
         self.offset.resize(self.rows.len(), 0.0);
         self.fill_coeffs();
-        self.form_lcp(contacts, p);
+        self.form_matrix();
         true
     }
 

@@ -27,14 +27,14 @@ pub mod state;
 
 pub use applied::{InputError, Inputs};
 pub use model::{Attachment, Model, Skips};
-pub use report::{StepError, StepReport, Timings};
+pub use report::{Lap, StepError, StepReport, Timings};
 pub use state::{BodyState, State};
 
 use applied::InvMass;
 use collision::{Counterpart, Geometry};
 use contact::Contact;
 use cosim_shared::SolverChoice;
-use mlcp::Mlcp;
+use mlcp::{Assembly, Mlcp};
 use nalgebra::Vector3;
 use solver::{Lcp, Lemke, LemkeError, Pgs, PgsParams, PgsProblem};
 
@@ -45,7 +45,6 @@ use solver::{Lcp, Lemke, LemkeError, Pgs, PgsParams, PgsProblem};
 /// like n^3 (the tableau), matrix-free PGS like its sweeps times n: they
 /// cross near n = 600.
 pub const AUTO_PGS_SIZE: usize = 600;
-use std::time::Instant;
 
 /// Lemke's guess for this step's LCP from the last step's final one, by
 /// contact identity (as PGS's warm start): each contact that was in it with
@@ -158,6 +157,8 @@ pub struct Engine {
     pgs_params: PgsParams,
     prepared: bool,
     collision_time: f64,
+    /// Time `prepare` spent on the matrix part, counted as assembly.
+    early_assembly: f64,
     /// Contacts projected out of deep penetration by this step's prepare.
     projected: usize,
 }
@@ -177,6 +178,7 @@ impl Engine {
             lemke: Lemke::with_max_pivots(max_pivots),
             prepared: false,
             collision_time: 0.0,
+            early_assembly: 0.0,
             projected: 0,
         }
     }
@@ -283,18 +285,48 @@ impl Engine {
 
     /// One whole step.
     pub fn step(&mut self) -> StepReport {
-        self.prepare();
+        self.prepare_contacts();
         self.finish()
     }
 
-    /// The part of the step that needs no input: collision, contact set,
-    /// inverse masses. Idempotent until the state changes.
+    /// The part of the step that needs no input, for a caller that has
+    /// time before the inputs arrive (the lockstep server, while the
+    /// controllers compute): collision, contact set, inverse masses, and the
+    /// matrix part of the mLCP for the contacts that the inputs held so far
+    /// would select (see `Mlcp::matrix_for`). `finish` keeps that matrix
+    /// when the actual inputs select the same contacts, cuts it down when
+    /// they select fewer, and builds afresh otherwise: the step's bits are
+    /// the same as `step`'s either way. Idempotent until the state changes.
     pub fn prepare(&mut self) {
-        if self.prepared {
+        let Some(mut lap) = self.prepare_contacts() else {
             return;
+        };
+        let _span = tracing::trace_span!("assemble_early").entered();
+        let (model, ws) = (&self.model, &mut self.ws);
+        applied::free_velocity(model, &self.state, &self.inputs, &ws.minv, &mut ws.nu_free);
+        prune::select(&mut ws.contacts, &self.state, &ws.nu_free, &model.params);
+        // A failure here is the step's to report: finish builds again.
+        let _ = ws.mlcp.matrix_for(
+            model,
+            &self.state,
+            &ws.contacts,
+            &ws.minv,
+            model.params.solver == SolverChoice::Pgs,
+        );
+        self.early_assembly = lap.lap();
+    }
+
+    /// Collision, contact set and inverse masses (and the projection out of
+    /// deep penetration), once per state: `None` when done already, else
+    /// the clock at its end.
+    fn prepare_contacts(&mut self) -> Option<Lap> {
+        if self.prepared {
+            return None;
         }
+        let mut lap = Lap::start();
+        self.ws.mlcp.invalidate();
+        self.early_assembly = 0.0;
         let _span = tracing::trace_span!("collision").entered();
-        let t0 = Instant::now();
         let ws = &mut self.ws;
         ws.contact_set(&self.model, &self.state);
         self.projected = match project::deep_penetration(
@@ -316,17 +348,21 @@ impl Engine {
             // The bodies moved: their contacts are those of the new positions.
             ws.contact_set(&self.model, &self.state);
         }
-        self.collision_time = t0.elapsed().as_secs_f64();
+        self.collision_time = lap.lap();
         self.prepared = true;
+        Some(lap)
     }
 
     /// The rest of the step, with the inputs as they are now. On failure the
     /// state is left unchanged and the report says why.
     pub fn finish(&mut self) -> StepReport {
-        self.prepare();
-        let start = Instant::now();
+        self.prepare_contacts();
+        let mut lap = Lap::start();
         let mut timings = Timings {
             collision: self.collision_time,
+            assemble: self.early_assembly,
+            // The wall time of prepare, then (in `measure`) of finish.
+            total: self.collision_time + std::mem::take(&mut self.early_assembly),
             ..Timings::default()
         };
         let p = &self.model.params;
@@ -344,13 +380,14 @@ impl Engine {
             not_converged: false,
             regularized: 0,
             projected: std::mem::take(&mut self.projected),
+            early_matrix: false,
             max_penetration: 0.0,
             max_joint_error: 0.0,
             energy: Default::default(),
             timings,
         };
 
-        let solved = self.solve(&mut report, &mut timings);
+        let solved = self.solve(&mut report, &mut timings, &mut lap);
         self.inputs.clear_impulses();
         if let Err(e) = solved {
             report.error = Some(e);
@@ -358,10 +395,9 @@ impl Engine {
             self.prepared = true; // the state did not change
             report.step = self.state.step;
             report.t = self.state.t;
-            return self.measure(report, timings, start);
+            return self.measure(report, timings, lap);
         }
 
-        let t0 = Instant::now();
         {
             let _span = tracing::trace_span!("integrate").entered();
             self.mark_impulsive();
@@ -377,7 +413,6 @@ impl Engine {
             self.state.t = self.state.step as f64 * self.model.params.h;
             self.prepared = false;
         }
-        timings.integrate = t0.elapsed().as_secs_f64();
         self.record_impulses();
         report.active_contacts = self
             .ws
@@ -385,43 +420,45 @@ impl Engine {
             .iter()
             .filter(|r| r.kind == ImpulseKind::Normal)
             .count();
-        self.measure(report, timings, start)
+        timings.integrate = lap.lap();
+        self.measure(report, timings, lap)
     }
 
     /// Applied impulses, pruning, mLCP, solver and recovery, repeated while
     /// the velocity check adds left-out contacts. Leaves `nu'` in `ws.nu`.
-    fn solve(&mut self, report: &mut StepReport, timings: &mut Timings) -> Result<(), StepError> {
+    fn solve(
+        &mut self,
+        report: &mut StepReport,
+        timings: &mut Timings,
+        lap: &mut Lap,
+    ) -> Result<(), StepError> {
         let model = &self.model;
         let ws = &mut self.ws;
-        let t0 = Instant::now();
         applied::free_velocity(model, &self.state, &self.inputs, &ws.minv, &mut ws.nu_free);
         let p = &model.params;
         prune::select(&mut ws.contacts, &self.state, &ws.nu_free, p);
-        timings.assemble += t0.elapsed().as_secs_f64();
         let mut canonical = false;
-        // The canonical re-solve's problem cut out of the last one (see
-        // `Mlcp::restrict`) instead of built again.
-        let mut restricted = false;
         loop {
-            let t0 = Instant::now();
             {
                 let _span = tracing::trace_span!("assemble").entered();
-                if !std::mem::take(&mut restricted) {
-                    ws.mlcp
-                        .build(
-                            model,
-                            &self.state,
-                            &ws.contacts,
-                            &ws.minv,
-                            &ws.nu_free,
-                            model.params.solver == SolverChoice::Pgs,
-                        )
-                        .map_err(StepError::Mlcp)?;
-                }
+                // Kept from `prepare` when these inputs select the same
+                // contacts; cut down for the canonical re-solve.
+                let how = ws
+                    .mlcp
+                    .matrix_for(
+                        model,
+                        &self.state,
+                        &ws.contacts,
+                        &ws.minv,
+                        model.params.solver == SolverChoice::Pgs,
+                    )
+                    .map_err(StepError::Mlcp)?;
+                report.early_matrix |= report.resolves == 0 && !canonical && how != Assembly::Built;
+                ws.mlcp.rhs(&ws.nu_free, &ws.contacts, p);
                 report.regularized += usize::from(ws.mlcp.joint_regularized);
             }
-            let t1 = Instant::now();
-            timings.assemble += (t1 - t0).as_secs_f64();
+            // Pruning, the velocity checks and the cuts count as assembly.
+            timings.assemble += lap.lap();
             {
                 let _span = tracing::trace_span!("solve").entered();
                 let m = &mut ws.mlcp;
@@ -542,7 +579,7 @@ impl Engine {
                     }
                 }
             }
-            timings.solve += t1.elapsed().as_secs_f64();
+            timings.solve += lap.lap();
             if !ws.nu.iter().all(|x| x.is_finite()) {
                 return Err(StepError::NonFinite);
             }
@@ -561,9 +598,6 @@ impl Engine {
             if !prune::keep_active(&mut ws.contacts, &ws.mlcp.lcp_contacts, &ws.mlcp.z) {
                 return Ok(());
             }
-            let t0 = Instant::now();
-            restricted = ws.mlcp.restrict(&ws.contacts, p);
-            timings.assemble += t0.elapsed().as_secs_f64();
         }
     }
 
@@ -673,16 +707,15 @@ impl Engine {
         &mut self,
         mut report: StepReport,
         mut timings: Timings,
-        start: Instant,
+        mut lap: Lap,
     ) -> StepReport {
-        let t0 = Instant::now();
         let _span = tracing::trace_span!("measure").entered();
         report.energy = measure::energy(&self.model, &self.state);
         report.max_penetration =
             measure::max_penetration(&self.model, &self.state, &mut self.ws.measure);
         report.max_joint_error = measure::max_joint_error(&self.model, &self.state);
-        timings.measure = t0.elapsed().as_secs_f64();
-        timings.total = timings.collision + start.elapsed().as_secs_f64();
+        timings.measure = lap.lap();
+        timings.total += lap.total();
         report.timings = timings;
         report
     }
