@@ -102,10 +102,33 @@ fn ipc(what: impl Into<String>) -> impl FnOnce(&dyn fmt::Debug) -> ClientError {
     }
 }
 
+/// An error of opening a service that can say the service does not exist.
+trait OpenError: fmt::Debug {
+    fn does_not_exist(&self) -> bool;
+}
+
+impl OpenError for iceoryx2::service::builder::event::EventOpenError {
+    fn does_not_exist(&self) -> bool {
+        matches!(self, Self::DoesNotExist)
+    }
+}
+
+impl OpenError for iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError {
+    fn does_not_exist(&self) -> bool {
+        matches!(self, Self::DoesNotExist)
+    }
+}
+
+impl OpenError for iceoryx2::service::builder::request_response::RequestResponseOpenError {
+    fn does_not_exist(&self) -> bool {
+        matches!(self, Self::DoesNotExist)
+    }
+}
+
 /// An open error: a missing service means no (complete) server yet, since
 /// a starting server creates its services one after the other.
-fn missing(server: &str, service: &str, e: impl fmt::Debug) -> ClientError {
-    if format!("{e:?}") == "DoesNotExist" {
+fn missing(server: &str, service: &str, e: impl OpenError) -> ClientError {
+    if e.does_not_exist() {
         ClientError::NoServer {
             name: server.into(),
         }
@@ -144,12 +167,7 @@ impl Connection {
             .service_builder(&service_name(&services::control(name))?)
             .request_response::<ControlRequest, ControlResponse>()
             .open()
-            .map_err(|e| match e {
-                iceoryx2::service::builder::request_response::RequestResponseOpenError::DoesNotExist => {
-                    ClientError::NoServer { name: name.into() }
-                }
-                e => ipc(format!("cannot open {}", services::control(name)))(&e),
-            })?;
+            .map_err(|e| missing(name, &services::control(name), e))?;
         let control = control
             .client_builder()
             .create()

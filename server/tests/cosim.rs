@@ -211,6 +211,10 @@ fn a_controller_answers_every_step_in_lockstep_and_the_run_replays_bit_for_bit()
     assert_eq!(s["deadline_misses"], 0);
     assert_eq!(s["controllers_joined"], 1);
     assert!(s["round_trip_us"]["median"].as_f64().unwrap() > 0.0);
+    // Most steps solved on the matrix made while the controller computed
+    // (it is kept unless the new torque selects other contacts), and the
+    // offline comparison below shows that changed no bit.
+    assert!(s["early_matrix_steps"].as_u64().unwrap() >= 150, "{s}");
     // The frames carry the states the server wrote, to the bit.
     let rows = positions(dir.path(), "upper");
     assert_eq!(rows.len(), 301);

@@ -137,6 +137,11 @@ pub struct Counters {
     pub stepping_seconds: f64,
     pub max_penetration: f64,
     pub max_joint_error: f64,
+    /// Contacts projected out of deep penetration (as `run` counts them).
+    pub projected_contacts: u64,
+    /// Steps whose first solve used the matrix `Engine::prepare` made
+    /// while the controllers computed (`StepReport::early_matrix`).
+    pub early_matrix_steps: u64,
 }
 
 /// The serve loop's phases besides the engine's compute (see
@@ -630,6 +635,8 @@ impl Server {
         self.c.steps += 1;
         self.c.max_penetration = self.c.max_penetration.max(report.max_penetration);
         self.c.max_joint_error = self.c.max_joint_error.max(report.max_joint_error);
+        self.c.projected_contacts += report.projected as u64;
+        self.c.early_matrix_steps += u64::from(report.early_matrix);
         if let Some(e) = report.error {
             self.c.failures += 1;
             tracing::error!(
@@ -907,6 +914,8 @@ impl Server {
             "deadline_ms": self.opts.deadline.as_secs_f64() * 1e3,
             "max_penetration": c.max_penetration,
             "max_joint_error": c.max_joint_error,
+            "projected_contacts": c.projected_contacts,
+            "early_matrix_steps": c.early_matrix_steps,
             "wall_seconds": wall,
         });
         match &self.opts.out {
