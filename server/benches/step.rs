@@ -30,13 +30,15 @@ fn step(c: &mut Criterion) {
     group.finish();
 }
 
-/// One criterion benchmark per stage of the step, on states of the
-/// reference run with contacts active (steps 300, 700, 1500): collision
-/// (`prepare`: detection, contact set, inverse masses), the LCP solve alone
-/// (Lemke on the step's reduced LCP), and the rest of the step (`finish`:
-/// applied impulses, pruning, assembly, solve, recovery, integration,
-/// measurements). `bench skips` shows what each skip saves from the step
-/// reports.
+/// One criterion benchmark per stage of the step as the lockstep server
+/// runs it, on states of the reference run with contacts active (steps 300,
+/// 700, 1500): `prepare` (detection, contact set, inverse masses, and the
+/// mLCP's matrix for the contacts the held inputs select: the part that
+/// overlaps the controllers), the LCP solve alone (Lemke on the step's
+/// reduced LCP), and the rest of the step (`finish`: applied impulses,
+/// pruning, the right-hand side on prepare's matrix, solve, recovery,
+/// integration, measurements). `bench skips` shows what each skip saves
+/// from the step reports.
 fn stages(c: &mut Criterion) {
     let scene = scenes::reference().expect("built-in scene");
     let mut engine = Engine::new(Model::from_scene(&scene));
@@ -48,7 +50,7 @@ fn stages(c: &mut Criterion) {
         }
     }
     let mut group = c.benchmark_group("stage");
-    group.bench_function("collision", |b| {
+    group.bench_function("prepare", |b| {
         b.iter_custom(|iters| {
             let mut total = std::time::Duration::ZERO;
             for i in 0..iters {

@@ -565,39 +565,45 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
         return Ok(out);
     }
     // The monitor's cost is a few percent at most, below this machine's
-    // noise between two runs: alternate runs with and without it, nine
-    // times, and compare the medians.
+    // noise between two runs (other tenants' load moves over seconds):
+    // pairs of runs back to back, with and without it, the order swapped
+    // every pair so that a drift favours neither, and the median of the
+    // pairs' ratios with its interquartile range.
+    const PAIRS: usize = 15;
     for mode in [WaitMode::Spin, WaitMode::Hybrid] {
-        let (mut without, mut with) = (Vec::new(), Vec::new());
-        // Runs of twice the steps: at 13 us per step a run of 20,000 is
-        // 0.26 s, short enough for a single preemption to show.
-        let (mut step_without, mut step_with) = (Vec::new(), Vec::new());
-        let (mut ph_without, mut ph_with) = ([0.0f64; 6], [0.0f64; 6]);
-        for _ in 0..9 {
-            let l = lockstep(1, mode, 2 * steps, None)?;
-            without.push(l.steps_per_s);
-            step_without.push(l.median_step_us);
-            ph_without
-                .iter_mut()
-                .zip(l.phases)
-                .for_each(|(a, b)| *a += b / 9.0);
-            let l = lockstep(1, mode, 2 * steps, Some("monitor"))?;
-            with.push(l.steps_per_s);
-            step_with.push(l.median_step_us);
-            ph_with
-                .iter_mut()
-                .zip(l.phases)
-                .for_each(|(a, b)| *a += b / 9.0);
+        let (mut rate, mut step, mut publish) = (Vec::new(), Vec::new(), Vec::new());
+        for pair in 0..PAIRS {
+            let run = |monitor: bool| lockstep(1, mode, 2 * steps, monitor.then_some("monitor"));
+            let (without, with) = if pair % 2 == 0 {
+                let a = run(false)?;
+                (a, run(true)?)
+            } else {
+                let b = run(true)?;
+                (run(false)?, b)
+            };
+            rate.push(with.steps_per_s / without.steps_per_s);
+            step.push(with.median_step_us / without.median_step_us);
+            publish.push((without.phases[5], with.phases[5]));
         }
-        let (a, b) = (median(&mut without), median(&mut with));
-        let (sa, sb) = (median(&mut step_without), median(&mut step_with));
+        let pct = |v: &mut Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            let q = |p: f64| (v[((v.len() - 1) as f64 * p).round() as usize] - 1.0) * 100.0;
+            format!(
+                "{:+.1} % (quartiles {:+.1} / {:+.1} %)",
+                q(0.5),
+                q(0.25),
+                q(0.75)
+            )
+        };
+        let n = publish.len() as f64;
+        let (pa, pb) = publish
+            .iter()
+            .fold((0.0, 0.0), |(a, b), (x, y)| (a + x / n, b + y / n));
         out.push_str(&format!(
-            "| lockstep, 1 controller, {}: without / with a monitor process (cosim monitor, newest frame at 10 Hz), medians of 9 alternating runs of twice the steps | {a:.0} / {b:.0} ({:+.1} %); median step {sa:.2} / {sb:.2} us ({:+.1} %); publish phase (the one a subscriber more can cost), mean of the runs, {:.2} / {:.2} us | - | - | - |\n",
+            "| lockstep, 1 controller, {}: with a monitor process (cosim monitor, newest frame at 10 Hz) against without, median ratio of {PAIRS} pairs of runs of twice the steps | steps/s {}; median step {}; publish phase (the one a subscriber more can cost), mean, {pa:.2} us without, {pb:.2} us with | - | - | - |\n",
             mode.as_str(),
-            (b / a - 1.0) * 100.0,
-            (sb / sa - 1.0) * 100.0,
-            ph_without[5],
-            ph_with[5]
+            pct(&mut rate),
+            pct(&mut step),
         ));
     }
     for mode in [WaitMode::Spin, WaitMode::Hybrid] {
