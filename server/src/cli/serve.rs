@@ -166,6 +166,7 @@ fn options(args: &ServeArgs) -> Result<(cosim_shared::Scene, ServeOptions), Stri
                 .unwrap_or_else(|| PathBuf::from("out").join(format!("serve-{}", args.name)))
         }),
         quiet: args.quiet,
+        timeline: false,
     };
     Ok((scene, opts))
 }

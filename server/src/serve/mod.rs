@@ -53,6 +53,11 @@ pub struct ServeOptions {
     /// benchmark that measures the loop alone).
     pub out: Option<PathBuf>,
     pub quiet: bool,
+    /// Keep each step's start (seconds since the Unix epoch, a clock other
+    /// processes share) and wall time in `Counters::timeline`, up to
+    /// `steps` of them (allocated before the first step): for a benchmark
+    /// that compares windows of one run.
+    pub timeline: bool,
 }
 
 /// How a serve run ended.
@@ -142,6 +147,9 @@ pub struct Counters {
     /// Steps whose first solve used the matrix `Engine::prepare` made
     /// while the controllers computed (`StepReport::early_matrix`).
     pub early_matrix_steps: u64,
+    /// With `ServeOptions::timeline`: (start since the epoch in s, wall
+    /// time in us) of each step.
+    pub timeline: Vec<(f64, f32)>,
 }
 
 /// The serve loop's phases besides the engine's compute (see
@@ -316,6 +324,12 @@ impl Server {
         let us = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e6;
         let mut top = Instant::now();
         self.stepping = Some(top);
+        let epoch0 = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64());
+        if self.opts.timeline {
+            self.c.timeline = Vec::with_capacity(self.opts.steps.unwrap_or(0) as usize);
+        }
         let mut last_top: Option<Instant> = None;
         loop {
             if terminated() {
@@ -323,6 +337,12 @@ impl Server {
             }
             if let Some(last) = last_top.replace(top) {
                 self.c.phases.step_wall.add(us(last, top));
+                // Within the capacity reserved above: no allocation.
+                let t = &mut self.c.timeline;
+                if t.len() < t.capacity() {
+                    let since = self.stepping.map_or(0.0, |s| (last - s).as_secs_f64());
+                    t.push((epoch0 + since, us(last, top) as f32));
+                }
             }
             if let Flow::Stop(e) = self.boundary()? {
                 return Ok(e);
