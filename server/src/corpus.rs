@@ -179,6 +179,24 @@ pub fn read_lcp(text: &str) -> Result<LcpProblem, FormatError> {
     Ok(LcpProblem { m, q })
 }
 
+/// Writes an LCP (`m` row-major `n x n`) in the Siconos dense form that
+/// [`read_lcp`] reads: a failed step's problem, to be solved again with
+/// `cosim-server lcp FILE` or any Siconos solver. Rust prints an `f64` with
+/// the fewest digits that read back to the same bits, so nothing is lost.
+pub fn write_lcp(n: usize, m: &[f64], q: &[f64]) -> String {
+    let mut out = format!("{n}\n0\n{n} {n}\n{n} {n}\n");
+    // Column-major: each line one column.
+    for j in 0..n {
+        let col: Vec<String> = (0..n).map(|i| format!("{}", m[i * n + j])).collect();
+        out.push_str(&col.join(" "));
+        out.push('\n');
+    }
+    let q: Vec<String> = q.iter().map(|x| format!("{x}")).collect();
+    out.push_str(&q.join(" "));
+    out.push('\n');
+    out
+}
+
 /// `A u + C v + a = 0,  0 <= D u + B v + b _|_ v >= 0`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MlcpProblem {

@@ -212,3 +212,39 @@ fn lcp_command_takes_the_pgs_solver() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--solver"));
 }
+
+/// A failed step's LCP is written for `cosim-server lcp` (`run` does it):
+/// writer and reader agree to the bit, on corpus problems (a block-stored
+/// one too) and on LCPs of the reference scene's steps.
+#[test]
+fn written_lcps_read_back_to_the_bit() {
+    use cosim_server::corpus::write_lcp;
+    use cosim_server::engine::{Engine, Model};
+    let mut problems: Vec<LcpProblem> = ["lcp_ortiz_block.dat", "lcp_tobenna.dat", "lcp_CPS_4.dat"]
+        .iter()
+        .map(|n| load(n))
+        .collect();
+    let scene = cosim_server::scenes::reference().expect("built-in scene");
+    let mut e = Engine::new(Model::from_scene(&scene));
+    for _ in 0..1500 {
+        e.step();
+        if matches!(e.state().step, 300 | 700 | 1500) {
+            let (n, m, q) = e.last_lcp();
+            assert!(n > 0, "contacts at step {}", e.state().step);
+            let text = write_lcp(n, m, q);
+            problems.push(read_lcp(&text).expect("written LCP reads"));
+            assert_eq!(
+                (
+                    problems.last().unwrap().m.data.as_slice(),
+                    problems.last().unwrap().q.as_slice()
+                ),
+                (m, q)
+            );
+        }
+    }
+    for p in &problems {
+        let n = p.q.len();
+        let again = read_lcp(&write_lcp(n, &p.m.data, &p.q)).expect("reads");
+        assert_eq!(&again, p);
+    }
+}

@@ -231,7 +231,17 @@ fn simulate(
         });
         writers.step(&report, diff)?;
         last_report = Some(report);
-        if !report.ok() {
+        if let Some(e) = report.error {
+            // The problem Lemke failed on, for `cosim-server lcp FILE` (or
+            // any Siconos solver): a failure one can reproduce without the
+            // run. (A singular joint block fails before there is an LCP.)
+            if matches!(e, crate::engine::StepError::Lemke(_)) {
+                let (n, m, q) = engine.last_lcp();
+                std::fs::write(
+                    writers.dir().join("failed_lcp.dat"),
+                    crate::corpus::write_lcp(n, m, q),
+                )?;
+            }
             break;
         }
         if k % 1000 == 999 {
@@ -351,7 +361,9 @@ fn simulate(
         );
     }
     if let Some(f) = &tally.first_failure {
-        eprintln!("error: the solver failed at {f}; the files hold every step before it");
+        eprintln!(
+            "error: the solver failed at {f}; the files hold every step before it (and failed_lcp.dat the LCP Lemke failed on: cosim-server lcp FILE)"
+        );
     }
     Ok(tally.failures == 0)
 }
