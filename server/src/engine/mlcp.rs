@@ -114,6 +114,25 @@ mod small {
     }
 }
 
+/// `X <- L^-1 X` for the `nb x nb` factor `l` (column-major) and the
+/// columns of `x` (column-major, `nb` rows): the small-block loops up to
+/// [`SMALL_BLOCK`] rows, faer above, as the factor was made.
+fn solve_lower(l: &[f64], nb: usize, x: &mut [f64]) {
+    if nb == 0 || x.is_empty() {
+        return;
+    }
+    if nb <= SMALL_BLOCK {
+        small::solve_lower(l, nb, x);
+    } else {
+        let cols = x.len() / nb;
+        solve_lower_triangular_in_place(
+            MatRef::from_column_major_slice(l, nb, nb),
+            MatMut::from_column_major_slice_mut(x, nb, cols),
+            Par::Seq,
+        );
+    }
+}
+
 /// Why the reduction failed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum MlcpError {
@@ -420,17 +439,7 @@ impl Mlcp {
         }
         self.yb.clear();
         self.yb.extend_from_slice(&self.b[..nb]);
-        if nb > 0 {
-            if nb <= SMALL_BLOCK {
-                small::solve_lower(&self.chol, nb, &mut self.yb);
-            } else {
-                solve_lower_triangular_in_place(
-                    MatRef::from_column_major_slice(&self.chol, nb, nb),
-                    MatMut::from_column_major_slice_mut(&mut self.yb, nb, 1),
-                    Par::Seq,
-                );
-            }
-        }
+        solve_lower(&self.chol, nb, &mut self.yb);
         self.form_rhs(contacts, p);
     }
 
@@ -534,15 +543,7 @@ impl Mlcp {
         if let Some(e) = failure {
             return Err(e);
         }
-        if nb <= SMALL_BLOCK {
-            small::solve_lower(&self.chol, nb, &mut self.y);
-        } else if m > 0 {
-            solve_lower_triangular_in_place(
-                MatRef::from_column_major_slice(&self.chol, nb, nb),
-                MatMut::from_column_major_slice_mut(&mut self.y, nb, m),
-                Par::Seq,
-            );
-        }
+        solve_lower(&self.chol, nb, &mut self.y);
         Ok(())
     }
 

@@ -145,6 +145,14 @@ impl Workspace {
         contact::build(model, state, &self.geoms, &mut self.contacts);
         applied::inverse_masses(model, state, &mut self.minv);
     }
+
+    /// The free velocity under `inputs` and the contacts it selects for
+    /// the LCP: `prepare` with the inputs held so far, `solve` with the
+    /// step's own.
+    fn select(&mut self, model: &Model, state: &State, inputs: &Inputs) {
+        applied::free_velocity(model, state, inputs, &self.minv, &mut self.nu_free);
+        prune::select(&mut self.contacts, state, &self.nu_free, &model.params);
+    }
 }
 
 pub struct Engine {
@@ -303,8 +311,7 @@ impl Engine {
         };
         let _span = tracing::trace_span!("assemble_early").entered();
         let (model, ws) = (&self.model, &mut self.ws);
-        applied::free_velocity(model, &self.state, &self.inputs, &ws.minv, &mut ws.nu_free);
-        prune::select(&mut ws.contacts, &self.state, &ws.nu_free, &model.params);
+        ws.select(model, &self.state, &self.inputs);
         // A failure here is the step's to report: finish builds again.
         let _ = ws.mlcp.matrix_for(
             model,
@@ -434,9 +441,8 @@ impl Engine {
     ) -> Result<(), StepError> {
         let model = &self.model;
         let ws = &mut self.ws;
-        applied::free_velocity(model, &self.state, &self.inputs, &ws.minv, &mut ws.nu_free);
+        ws.select(model, &self.state, &self.inputs);
         let p = &model.params;
-        prune::select(&mut ws.contacts, &self.state, &ws.nu_free, p);
         let mut canonical = false;
         loop {
             {

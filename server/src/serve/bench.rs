@@ -4,14 +4,16 @@
 //!   frame between two processes (spinning, and blocking on events);
 //! - lockstep steps per second on the reference scene with 1, 2 and 4
 //!   controller processes in spin, block and hybrid waiting;
-//! - the same with a monitor process reading every frame;
+//! - a monitor's cost, from windows of one run with it attached and
+//!   detached ([`monitor_windows`]), and a recorder process reading every
+//!   frame;
 //! - the baseline: the same lockstep over a TCP loopback socket, what a
 //!   socket-based (gRPC-style) co-simulation pays at the least.
 //!
 //! Controllers and peers are this program started again with the hidden
 //! `bench-peer` subcommand, so every figure crosses a process boundary.
 
-use super::{serve, ServeOptions};
+use super::{epoch_seconds, serve, ServeOptions};
 use crate::engine::{Engine, Model};
 use cosim_client::{Controller, InputFrame, Monitor, WaitMode};
 use cosim_shared::wire::StateFrame;
@@ -247,12 +249,7 @@ fn lockstep(
     steps: u64,
     sidecar: Option<&str>,
 ) -> Result<Lockstep, BoxError> {
-    let name = format!(
-        "bench-{}-{controllers}-{}-{}",
-        std::process::id(),
-        mode.as_str(),
-        sidecar.unwrap_or("none")
-    );
+    let name = run_name(controllers, mode, sidecar);
     let mut scene = crate::scenes::reference()?;
     if sidecar == Some("monitor-toggle") {
         // A run of a million steps: with Lemke alone the reference scene
@@ -324,16 +321,20 @@ fn lockstep(
     })
 }
 
+/// The server name of a lockstep run: unique per bench process and row.
+fn run_name(controllers: usize, mode: WaitMode, sidecar: Option<&str>) -> String {
+    format!(
+        "bench-{}-{controllers}-{}-{}",
+        std::process::id(),
+        mode.as_str(),
+        sidecar.unwrap_or("none")
+    )
+}
+
 /// Where the toggling monitor writes its attached intervals (one line
 /// `start end`, seconds since the epoch, per interval).
 fn intervals_file(name: &str) -> std::path::PathBuf {
     std::env::temp_dir().join(format!("cosim-bench-{name}.intervals"))
-}
-
-fn epoch_now() -> f64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0.0, |d| d.as_secs_f64())
 }
 
 /// Attached and detached windows, in `WINDOW` seconds each, with this
@@ -353,12 +354,7 @@ const MARGIN: f64 = 0.02;
 /// detached, of each pair: steps per second, and median step.
 fn monitor_windows(mode: WaitMode, steps: u64) -> Result<(Vec<f64>, Vec<f64>), BoxError> {
     let l = lockstep(1, mode, steps, Some("monitor-toggle"))?;
-    let name = format!(
-        "bench-{}-1-{}-monitor-toggle",
-        std::process::id(),
-        mode.as_str()
-    );
-    let file = intervals_file(&name);
+    let file = intervals_file(&run_name(1, mode, Some("monitor-toggle")));
     let text = std::fs::read_to_string(&file).unwrap_or_default();
     let _ = std::fs::remove_file(&file);
     let attached: Vec<(f64, f64)> = text
@@ -457,39 +453,19 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
             }
             Ok(())
         }
-        // As `cosim monitor`: the newest frame, ten times a second.
-        "monitor" | "recorder" => {
-            let m = cosim_client::when_up(Duration::from_secs(30), || {
-                if role == "recorder" {
-                    Monitor::open(name, 64)
-                } else {
-                    Monitor::polling(name)
-                }
-            })?;
-            loop {
-                // The recorder takes every frame, woken for each.
-                let f = if role == "recorder" {
-                    match m.next(Duration::from_secs(30)) {
-                        Ok(f) => f,
-                        Err(_) => return Ok(()),
-                    }
-                } else {
-                    if m.node().wait(Duration::from_millis(100)).is_err() {
-                        return Ok(());
-                    }
-                    match m.latest()? {
-                        Some(f) => f,
-                        None => continue,
-                    }
-                };
+        // The recorder takes every frame, woken for each.
+        "recorder" => {
+            let m = cosim_client::when_up(Duration::from_secs(30), || Monitor::open(name, 64))?;
+            while let Ok(f) = m.next(Duration::from_secs(30)) {
                 if f.status & cosim_shared::wire::STATUS_SHUTDOWN != 0 {
-                    return Ok(());
+                    break;
                 }
             }
+            Ok(())
         }
-        // Attached for a window (the newest frame at 10 Hz), detached for
-        // the next, until the server is gone; the attached intervals go to
-        // `intervals_file`.
+        // As `cosim monitor` (the newest frame, ten times a second) for a
+        // window, detached for the next, until the server is gone; the
+        // attached intervals go to `intervals_file`.
         "monitor-toggle" => {
             let mut out = std::fs::File::create(intervals_file(name))?;
             loop {
@@ -498,8 +474,8 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
                 else {
                     return Ok(());
                 };
-                let start = epoch_now();
-                while epoch_now() < start + WINDOW {
+                let start = epoch_seconds();
+                while epoch_seconds() < start + WINDOW {
                     if m.node().wait(Duration::from_millis(100)).is_err() {
                         return Ok(());
                     }
@@ -510,7 +486,7 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
                     }
                 }
                 drop(m);
-                writeln!(out, "{start} {}", epoch_now())?;
+                writeln!(out, "{start} {}", epoch_seconds())?;
                 out.flush()?;
                 std::thread::sleep(Duration::from_secs_f64(WINDOW));
             }

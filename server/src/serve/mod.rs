@@ -60,6 +60,19 @@ pub struct ServeOptions {
     pub timeline: bool,
 }
 
+/// Microseconds from `a` to `b`.
+fn us(a: Instant, b: Instant) -> f64 {
+    (b - a).as_secs_f64() * 1e6
+}
+
+/// Seconds since the Unix epoch: a clock other processes read too (the
+/// timeline of `ServeOptions::timeline` and the bench's peers).
+pub(crate) fn epoch_seconds() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
 /// How a serve run ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Ending {
@@ -321,12 +334,10 @@ impl Server {
         // One clock read per phase boundary (a read is about 30 ns here):
         // the end of one phase is the start of the next, and the end of a
         // step's publish is the next step's top.
-        let us = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e6;
         let mut top = Instant::now();
-        self.stepping = Some(top);
-        let epoch0 = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0.0, |d| d.as_secs_f64());
+        let start = top;
+        self.stepping = Some(start);
+        let epoch0 = epoch_seconds();
         if self.opts.timeline {
             self.c.timeline = Vec::with_capacity(self.opts.steps.unwrap_or(0) as usize);
         }
@@ -340,8 +351,7 @@ impl Server {
                 // Within the capacity reserved above: no allocation.
                 let t = &mut self.c.timeline;
                 if t.len() < t.capacity() {
-                    let since = self.stepping.map_or(0.0, |s| (last - s).as_secs_f64());
-                    t.push((epoch0 + since, us(last, top) as f32));
+                    t.push((epoch0 + (last - start).as_secs_f64(), us(last, top) as f32));
                 }
             }
             if let Flow::Stop(e) = self.boundary()? {
@@ -477,9 +487,7 @@ impl Server {
             }
             if done {
                 let now = Instant::now();
-                self.c
-                    .round_trips
-                    .add((now - published).as_secs_f64() * 1e6);
+                self.c.round_trips.add(us(published, now));
                 return Ok((Flow::Go, now));
             }
             // Requests in the same loop: a controller that leaves is not

@@ -45,6 +45,12 @@ pub const REGULARIZED_VERIFY_TOL: f64 = 1e-6;
 /// Largest accepted relative residual of a returned solution.
 pub const VERIFY_TOL: f64 = 1e-8;
 
+/// `Q_SNAP max |q_i|`: entries of `q` (and values computed from it) at or
+/// below this are round-off.
+fn q_snap(lcp: &Lcp) -> f64 {
+    Q_SNAP * lcp.q.iter().fold(0.0f64, |a, &b| a.max(b.abs()))
+}
+
 /// How Lemke's algorithm failed, with the data that shows it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LemkeError {
@@ -226,7 +232,7 @@ impl Lemke {
         // step's guess then carries the wrong support and fails (measured on
         // the reference scene: every other resting step fell back to a full
         // Lemke run of 11-13 pivots). Lemke snaps `q` at the same bound.
-        let snap = Q_SNAP * lcp.q.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        let snap = q_snap(lcp);
         for &(si, first, count) in slacks {
             if active.get(si) != Some(&false) || first + count > n {
                 continue;
@@ -262,8 +268,7 @@ impl Lemke {
     ) -> Result<SolveInfo, LemkeError> {
         let n = lcp.n;
         z[..n].fill(0.0);
-        let qmax = lcp.q.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-        let snap = Q_SNAP * qmax;
+        let snap = q_snap(lcp);
         // The trivial case costs nothing: z = 0 solves it when q >= 0.
         if shift == 0.0 && lcp.q.iter().all(|&qi| qi >= -snap) {
             return Ok(SolveInfo {
