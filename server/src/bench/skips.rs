@@ -3,6 +3,7 @@
 //! scene in one run, and how far apart the two trajectories end up (the
 //! skips must not change the answer).
 
+use crate::engine::model::Params;
 use crate::engine::{Engine, Model, Timings};
 use cosim_shared::{Scene, SolverChoice};
 use std::fmt::Write as _;
@@ -149,51 +150,47 @@ pub fn measure(steps: u64) -> Result<Vec<Measured>, String> {
     let reference = crate::scenes::reference().map_err(|e| e.to_string())?;
     let frictionless =
         Scene::parse(FRICTIONLESS, "frictionless.toml").map_err(|e| e.to_string())?;
-    let mut out = Vec::new();
-
-    let on = model(&reference, SolverChoice::Lemke);
-    let mut off = on.clone();
-    off.params.full = true;
-    out.push(Measured::of(
-        "pruning (contacts that cannot close)",
-        "reference, Lemke",
-        on,
-        off,
-        steps,
-    ));
-
-    let on = model(&frictionless, SolverChoice::Lemke);
-    let mut off = on.clone();
-    off.params.skips.frictionless_rows = false;
-    out.push(Measured::of(
-        "no friction rows where mu = 0",
-        "frictionless, Lemke",
-        on,
-        off,
-        steps,
-    ));
-
-    let on = model(&reference, SolverChoice::Lemke);
-    let mut off = on.clone();
-    off.params.skips.lemke_guess = false;
-    out.push(Measured::of(
-        "Lemke starts from the last support",
-        "reference, Lemke",
-        on,
-        off,
-        steps,
-    ));
-
-    let on = model(&reference, SolverChoice::Pgs);
-    let mut off = on.clone();
-    off.params.skips.warm_start = false;
-    out.push(Measured::of(
-        "PGS warm start",
-        "reference, PGS",
-        on,
-        off,
-        steps,
-    ));
+    // Each skip: its scene and solver, and how to switch it off.
+    type Off = fn(&mut Params);
+    let cases: [(&'static str, &'static str, &Scene, SolverChoice, Off); 4] = [
+        (
+            "pruning (contacts that cannot close)",
+            "reference, Lemke",
+            &reference,
+            SolverChoice::Lemke,
+            |p| p.full = true,
+        ),
+        (
+            "no friction rows where mu = 0",
+            "frictionless, Lemke",
+            &frictionless,
+            SolverChoice::Lemke,
+            |p| p.skips.frictionless_rows = false,
+        ),
+        (
+            "Lemke starts from the last support",
+            "reference, Lemke",
+            &reference,
+            SolverChoice::Lemke,
+            |p| p.skips.lemke_guess = false,
+        ),
+        (
+            "PGS warm start",
+            "reference, PGS",
+            &reference,
+            SolverChoice::Pgs,
+            |p| p.skips.warm_start = false,
+        ),
+    ];
+    let out = cases
+        .into_iter()
+        .map(|(skip, on_scene, scene, solver, switch_off)| {
+            let on = model(scene, solver);
+            let mut off = on.clone();
+            switch_off(&mut off.params);
+            Measured::of(skip, on_scene, on, off, steps)
+        })
+        .collect();
     Ok(out)
 }
 
