@@ -289,8 +289,12 @@ pub enum MlcpOutcome {
 /// The solver of a corpus LCP (or of a mixed LCP's reduced LCP).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LcpSolver {
-    /// [`Lemke::solve_plain`](crate::engine::solver::Lemke::solve_plain).
+    /// [`Lemke::solve_plain`](crate::engine::solver::Lemke::solve_plain):
+    /// one run, the textbook method with its floating-point care.
     Lemke,
+    /// [`Lemke::solve`](crate::engine::solver::Lemke::solve): the engine's
+    /// ladder of pivot tolerances, refinement and regularisation.
+    LemkeLadder,
     /// [`pgs::solve_dense`](crate::engine::solver::pgs::solve_dense).
     Pgs(crate::engine::solver::PgsParams),
 }
@@ -304,7 +308,11 @@ pub fn solve_lcp(
 ) -> Result<(usize, f64), LcpFailure> {
     use crate::engine::solver::{pgs, Lemke, LemkeError};
     match solver {
-        LcpSolver::Lemke => match Lemke::new().solve_plain(lcp, z) {
+        LcpSolver::Lemke | LcpSolver::LemkeLadder => match if solver == LcpSolver::Lemke {
+            Lemke::new().solve_plain(lcp, z)
+        } else {
+            Lemke::new().solve(lcp, z)
+        } {
             Ok(info) => Ok((info.work, info.residual)),
             Err(e) => {
                 let (status, work, residual) = match e {

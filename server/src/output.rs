@@ -20,7 +20,7 @@ pub fn num(x: f64) -> String {
 }
 
 pub use cosim_shared::{IMPULSES_HEADER, STATES_HEADER};
-pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw,projected";
+pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw,projected,rung,refined,fallback,compliance,energy_refused";
 
 /// The three CSV files of a run.
 pub struct Writers {
@@ -148,6 +148,14 @@ impl Writers {
             shadow.map_or(String::new(), |s| num(s.0)),
             shadow.map_or(String::new(), |s| num(s.1)),
             r.projected.to_string(),
+            r.rung.as_str().to_string(),
+            r.refined.to_string(),
+            r.fallback.map_or("none", |f| f.as_str()).to_string(),
+            num(match r.fallback {
+                Some(crate::engine::Fallback::Compliant { eps }) => eps,
+                _ => 0.0,
+            }),
+            u8::from(r.energy_refused).to_string(),
         ];
         writeln!(self.steps, "{}", fields.join(","))
     }
@@ -162,4 +170,43 @@ impl Writers {
 /// A contact's name: `a/b`, e.g. `upper/floor`.
 pub fn contact_name(model: &Model, a: Party, b: Party) -> String {
     format!("{}/{}", party_name(model, a), party_name(model, b))
+}
+
+/// The ladder's counts as `summary.json` holds them: steps by the highest
+/// rung of Lemke's ladder they needed, refined answers, and the steps that
+/// fell back to another formulation (see `engine::fallback`).
+pub fn ladder_json(c: &crate::engine::LadderCounts) -> serde_json::Value {
+    use crate::engine::solver::Rung;
+    let mut rungs = serde_json::Map::new();
+    for (rung, n) in Rung::LADDER.iter().zip(c.rungs) {
+        rungs.insert(rung.as_str().to_string(), n.into());
+    }
+    serde_json::json!({
+        "rungs": rungs,
+        "refined": c.refined,
+        "relaxed": c.relaxed,
+        "compliant": c.compliant,
+        "max_compliance": c.max_compliance,
+        "energy_refused": c.energy_refused,
+    })
+}
+
+/// The ladder's counts on one line of a run summary.
+pub fn ladder_line(c: &crate::engine::LadderCounts) -> String {
+    use crate::engine::solver::Rung;
+    let rungs: Vec<String> = Rung::LADDER
+        .iter()
+        .zip(c.rungs)
+        .filter(|(_, n)| *n > 0)
+        .map(|(r, n)| format!("{} {n}", r.as_str()))
+        .collect();
+    format!(
+        "{}; refined {}; fell back: relaxed {}, compliant {} (largest eps {:.1e}), energy-refused {}",
+        if rungs.is_empty() { "no Lemke solve".to_string() } else { rungs.join(", ") },
+        c.refined,
+        c.relaxed,
+        c.compliant,
+        c.max_compliance,
+        c.energy_refused
+    )
 }

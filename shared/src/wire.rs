@@ -147,6 +147,10 @@ pub const STATUS_CONTACTS_TRUNCATED: u32 = 64;
 /// The server busy-polls for inputs (`--wait spin`): a controller need not
 /// notify the wake event after its input (a system call saved per step).
 pub const STATUS_SERVER_SPINS: u32 = 128;
+/// The last step's rigid LCP had no solution the solver found (or its
+/// answer added energy): the step went on with the relaxed or compliant
+/// formulation (the server's `--on-failure continue`).
+pub const STATUS_FELL_BACK: u32 = 256;
 
 /// The state after step `step`, published once per step (and again after
 /// reset, restore and join, with the same step).

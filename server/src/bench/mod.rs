@@ -4,6 +4,7 @@
 
 pub mod accuracy;
 pub mod cases;
+pub mod robust;
 pub mod skips;
 pub mod stress;
 pub mod text;

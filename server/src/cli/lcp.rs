@@ -16,7 +16,8 @@ pub fn lcp(args: &LcpArgs) -> ExitCode {
         }
     };
     let (solver, name, work) = match args.solver.as_str() {
-        "lemke" => (LcpSolver::Lemke, "lemke", "pivots"),
+        "lemke" => (LcpSolver::LemkeLadder, "lemke", "pivots"),
+        "lemke-plain" => (LcpSolver::Lemke, "lemke-plain", "pivots"),
         "pgs" => (
             LcpSolver::Pgs(PgsParams {
                 tolerance: args.tolerance,
@@ -27,7 +28,9 @@ pub fn lcp(args: &LcpArgs) -> ExitCode {
             "iterations",
         ),
         other => {
-            eprintln!("error: --solver: unknown solver {other:?} (expected lemke or pgs)");
+            eprintln!(
+                "error: --solver: unknown solver {other:?} (expected lemke, lemke-plain or pgs)"
+            );
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };

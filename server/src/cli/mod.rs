@@ -94,6 +94,25 @@ pub enum BenchWhat {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Robustness: seeded random small scenes (corners, creases, touching
+    /// and overlapping spheres, joints to the world, mu up to 1), each
+    /// stepped and checked for failed steps, energy and speed bounds.
+    Robust {
+        /// Scenes to run.
+        #[arg(long, default_value_t = 10_000)]
+        scenes: u64,
+        /// Steps per scene.
+        #[arg(long, default_value_t = 20)]
+        steps: u64,
+        /// First seed (scenes use seed, seed + 1, ...).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        #[arg(long, default_value = "lemke")]
+        solver: cosim_shared::SolverChoice,
+        /// Also write the table to this file.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Stress suite: mass ratios, a pile at rest, 100 m/s impacts,
     /// degenerate and overlapping contacts, redundant joints, a long run,
     /// radii from 1 mm to 10 m. Prints a table (also to --out).
@@ -147,7 +166,9 @@ pub struct LcpArgs {
     /// residual, z.
     #[arg(long)]
     pub json: bool,
-    /// lemke (complementary pivoting) or pgs (projected Gauss-Seidel, which
+    /// lemke (complementary pivoting, with the engine's ladder of pivot
+    /// tolerances, refinement and regularisation), lemke-plain (one run,
+    /// what the corpus tests check) or pgs (projected Gauss-Seidel, which
     /// converges for symmetric positive semi-definite matrices).
     #[arg(long, default_value = "lemke")]
     pub solver: String,
@@ -250,6 +271,21 @@ pub fn main() -> ExitCode {
                     out,
                 },
         } => bench_stress(&solver, long_steps, out.as_deref()),
+        Command::Bench {
+            what:
+                BenchWhat::Robust {
+                    scenes,
+                    steps,
+                    seed,
+                    solver,
+                    out,
+                },
+        } => {
+            use crate::bench::robust;
+            let table = robust::run(scenes, steps, seed, solver)
+                .map(|s| robust::table(&s, steps, seed, solver));
+            print_table("bench robust", table, out.as_deref())
+        }
         Command::Bench {
             what: BenchWhat::Skips { steps, out },
         } => {

@@ -75,6 +75,7 @@ struct Tally {
     resolves: u64,
     regularized: u64,
     projected: u64,
+    ladder: crate::engine::LadderCounts,
 }
 
 impl Tally {
@@ -87,6 +88,7 @@ impl Tally {
         self.resolves += r.resolves as u64;
         self.regularized += r.regularized as u64;
         self.projected += r.projected as u64;
+        self.ladder.add(r);
         if let Some(e) = r.error {
             self.failures += 1;
             self.first_failure
@@ -286,6 +288,8 @@ fn simulate(
         "resolves": tally.resolves,
         "regularized_solves": tally.regularized,
         "projected_contacts": tally.projected,
+        "ladder": crate::output::ladder_json(&tally.ladder),
+        "fallback_steps": tally.ladder.fell_back(),
         "shadow_max_dv": shadow.then_some(shadow_max.0),
         "shadow_max_dw": shadow.then_some(shadow_max.1),
         "energy_initial": energy_initial.total,
@@ -327,6 +331,7 @@ fn simulate(
             }
         );
         println!("LCP          largest {} unknowns, {} pivots in all, worst residual {:.1e}, {} re-solves, {} regularised solves", tally.max_lcp_size, tally.pivots, tally.max_residual, tally.resolves, tally.regularized);
+        println!("ladder       {}", crate::output::ladder_line(&tally.ladder));
         if shadow {
             println!(
                 "shadow       largest velocity difference to the other solver {:.2e} m/s, {:.2e} rad/s",

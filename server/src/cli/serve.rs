@@ -2,7 +2,7 @@
 
 use super::{RunArgs, EXIT_BAD_INPUT, EXIT_FAILED};
 use crate::plot::{self, PlotOptions};
-use crate::serve::controllers::MissPolicy;
+use crate::serve::controllers::{FailurePolicy, MissPolicy};
 use crate::serve::replay::{replay as run_replay, ReplayOutcome};
 use crate::serve::{serve as run_serve, Ending, ServeError, ServeOptions};
 use cosim_client::WaitMode;
@@ -26,6 +26,11 @@ pub struct ServeArgs {
     /// What a missed deadline does to that controller's input.
     #[arg(long, value_enum, default_value_t = MissPolicy::Hold)]
     pub on_miss: MissPolicy,
+    /// What a step whose rigid LCP has no solution does: continue (the
+    /// engine's relaxed or compliant fallback, reported; a step nothing
+    /// solves pauses), pause or abort (rigid answers only).
+    #[arg(long, value_enum, default_value_t = FailurePolicy::Continue)]
+    pub on_failure: FailurePolicy,
     /// How the server waits for inputs.
     #[arg(long, value_enum, default_value_t = WaitMode::Hybrid)]
     pub wait: WaitMode,
@@ -156,6 +161,7 @@ fn options(args: &ServeArgs) -> Result<(cosim_shared::Scene, ServeOptions), Stri
         controllers: args.controllers,
         deadline: Duration::from_secs_f64(args.deadline_ms / 1e3),
         on_miss: args.on_miss,
+        on_failure: args.on_failure,
         wait: args.wait,
         drop_after: args.drop_after,
         steps,
@@ -206,7 +212,7 @@ fn report(
                     println!("output       {}", out.display());
                 }
             }
-            if ending == Ending::Aborted || c.failures > 0 {
+            if matches!(ending, Ending::Aborted | Ending::Failed) || c.failures > 0 {
                 ExitCode::from(EXIT_FAILED)
             } else {
                 ExitCode::SUCCESS
@@ -245,6 +251,7 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
         controllers: 1,
         deadline_ms: 2000.0,
         on_miss: MissPolicy::Hold,
+        on_failure: FailurePolicy::Continue,
         wait: args.wait,
         drop_after: 3,
         steps: None,

@@ -192,6 +192,45 @@ pub fn normal_offset(c: &Contact, v_n_free: f64, p: &Params) -> f64 {
     }
 }
 
+/// Which constant terms the LCP's right-hand side carries.
+///
+/// `Full` is the formulation of formulation.md: joint rows
+/// `G_b^T nu' + beta psi_b / h = 0`, normal rows `G_n^T nu' + a_n >= 0` with
+/// [`normal_offset`]'s `a_n`, negative where the row asks the contact to
+/// separate (a penetration to remove, a restitution target).
+///
+/// `Relaxed` is the step's fallback where the `Full` LCP has no solution
+/// (formulation.md, "When the rigid problem has no solution"): the joint
+/// drift term is dropped (`G_b^T nu' = 0`) and every normal offset is
+/// clipped at zero (`a_n <- max(a_n, 0)`: a gap may still close exactly,
+/// but no row asks for a separation speed). The position errors are left
+/// to the next steps' stabilisation and to the projection out of deep
+/// penetration, which act on positions, not through the LCP.
+///
+/// Why it is always solvable: with `x = [p_n; p_f; s]`, the LCP matrix is
+/// copositive (`x^T M x = lambda^T W lambda + s^T U p_n >= 0`, `W` the
+/// joint-reduced Delassus matrix, positive semidefinite). Any `x` of its
+/// homogeneous problem (`x >= 0, M x >= 0, x^T M x = 0`) has `W lambda = 0`,
+/// so `G_c lambda + G_b p_b = 0` for some joint impulse `p_b`; then
+/// `q^T x = p_b^T (beta psi_b / h) + a_n^T p_n`, which is `a_n^T p_n >= 0`
+/// once the joint term is zero and `a_n >= 0`. That is the condition under
+/// which Lemke's method processes a copositive LCP (Cottle, Pang and Stone,
+/// Theorem 4.4.13; Anitescu and Potra 1997 use it for this very
+/// formulation). The `Full` offsets break it exactly where the random
+/// scenes' failures were: a corner with `mu = 1` or a pinned sphere asked
+/// to separate along a direction friction locks.
+///
+/// And it never adds energy: with `nu' = nu_free + M^-1 G p`,
+/// `K(nu') - K(nu_free) = p^T G^T nu' - 1/2 p^T G^T M^-1 G p <= p^T G^T nu'`,
+/// and complementarity gives `p_b^T G_b^T nu' = 0`,
+/// `p_n^T G_n^T nu' = -a_n^T p_n <= 0`, `p_f^T G_f^T nu' = -p_f^T E s <= 0`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Offsets {
+    #[default]
+    Full,
+    Relaxed,
+}
+
 /// The step's mLCP, its reduction and its scratch space.
 #[derive(Default)]
 pub struct Mlcp {
@@ -429,18 +468,20 @@ impl Mlcp {
     /// The right-hand side for the free velocity `nu_free`, on the matrix
     /// part made by [`Mlcp::matrix_for`]: `b` (`G^T nu_free`, plus
     /// `beta psi_b / h` on the joint rows), `y_b = L^-1 b_b` and the LCP's
-    /// `q` with the normal offsets.
-    pub fn rhs(&mut self, nu_free: &[f64], contacts: &[Contact], p: &Params) {
+    /// `q` with the normal offsets; with [`Offsets::Relaxed`], the offsets
+    /// that ask for motion are left out (see there).
+    pub fn rhs(&mut self, nu_free: &[f64], contacts: &[Contact], p: &Params, offsets: Offsets) {
         let nb = self.nb;
         self.b.clear();
         for (k, row) in self.basis.iter().enumerate() {
             let v = row.velocity(nu_free);
-            self.b.push(if k < nb { v + self.offset[k] } else { v });
+            let drift = k < nb && offsets == Offsets::Full;
+            self.b.push(if drift { v + self.offset[k] } else { v });
         }
         self.yb.clear();
         self.yb.extend_from_slice(&self.b[..nb]);
         solve_lower(&self.chol, nb, &mut self.yb);
-        self.form_rhs(contacts, p);
+        self.form_rhs(contacts, p, offsets);
     }
 
     /// Fills [`Mlcp::coeffs`]: contact row `i` of the LCP (normal rows,
@@ -550,7 +591,7 @@ impl Mlcp {
     /// The pure LCP's right-hand side `q` alone (no matrix): what the
     /// iterative solver needs for its normal offsets and residual scale.
     /// Formed on the basis contact rows (in `self.qb`), then expanded.
-    fn form_rhs(&mut self, contacts: &[Contact], p: &Params) {
+    fn form_rhs(&mut self, contacts: &[Contact], p: &Params, offsets: Offsets) {
         let (nb, r) = (self.nb, self.basis.len());
         let mb = r - nb;
         let n = self.lcp_size();
@@ -568,7 +609,10 @@ impl Mlcp {
         // Gap terms: the free normal velocity includes the joints' response.
         for i in 0..self.nc {
             let c = &contacts[self.lcp_contacts[i]];
-            let a_n = normal_offset(c, self.lcp_q[i], p);
+            let a_n = match offsets {
+                Offsets::Full => normal_offset(c, self.lcp_q[i], p),
+                Offsets::Relaxed => normal_offset(c, self.lcp_q[i], p).max(0.0),
+            };
             self.lcp_q[i] += a_n;
             self.offset[nb + i] = a_n;
         }
@@ -662,6 +706,81 @@ impl Mlcp {
                 row.add_to(impulse, nu);
             }
         }
+    }
+
+    /// `K(nu') - K(nu_free)` of the last [`Mlcp::recover`], from the rows
+    /// alone: with `M (nu' - nu_free) = G lambda`,
+    /// `K(nu') - K(nu_free) = 1/2 (nu' + nu_free)^T M (nu' - nu_free)
+    ///                     = 1/2 sum_k lambda_k G_k^T (nu' + nu_free)`
+    /// over the basis rows (joint impulses `p_b`, contact impulses on the
+    /// basis); no mass matrix needed.
+    pub fn kinetic_change(&self, nu_free: &[f64], nu: &[f64]) -> f64 {
+        let nb = self.nb;
+        self.basis
+            .iter()
+            .enumerate()
+            .map(|(k, row)| {
+                let lambda = if k < nb { self.p_b[k] } else { self.zb[k - nb] };
+                if lambda == 0.0 {
+                    0.0
+                } else {
+                    0.5 * lambda * (row.velocity(nu) + row.velocity(nu_free))
+                }
+            })
+            .sum()
+    }
+
+    /// The kinetic energy the stabilisation may give (J): each row whose
+    /// offset asks for a separation speed `v` (a joint's drift term, a
+    /// penetrating or bouncing contact's negative `a_n`) gets `v^2 / 2`
+    /// over its own Delassus diagonal (its effective inverse mass), the
+    /// energy of that row alone moving at `v`.
+    ///
+    /// Why the diagonal: the least energy that meets every row's speed at
+    /// once is `1/2 v^T W^-1 v`, unbounded as the rows become dependent. A
+    /// jointed chain pressed into a contact is such a case (joint_torques,
+    /// step 2069: impulses of 1.7e5 N s, 0.49 J gained in one step without
+    /// input): there the rigid answer is the stabilisation's artefact, not
+    /// physics, and `engine::fallback` refuses it.
+    pub fn stabilisation_budget(&self) -> f64 {
+        let (nb, r) = (self.nb, self.basis.len());
+        let n = self.lcp_size();
+        let joints: f64 = (0..nb)
+            .map(|k| {
+                let v = self.offset[k];
+                let d = self.w[k * r + k];
+                if d > 0.0 {
+                    0.5 * v * v / d
+                } else {
+                    0.0
+                }
+            })
+            .sum();
+        let contacts: f64 = (0..self.nc)
+            .map(|i| {
+                let v = self.offset[nb + i].min(0.0);
+                let d = self.lcp_m.get(i * n + i).copied().unwrap_or(0.0);
+                if v < 0.0 && d > 0.0 {
+                    0.5 * v * v / d
+                } else {
+                    0.0
+                }
+            })
+            .sum();
+        joints + contacts
+    }
+
+    /// The work the separation-asking offsets `offset` (a copy of
+    /// [`Mlcp::offset`] made with [`Offsets::Full`]) would do at the
+    /// impulses of the last [`Mlcp::recover`]: `sum |lambda_k| |v_k|` over
+    /// joint rows and over normal rows with `a_n < 0` (J).
+    pub fn offset_work(&self, offset: &[f64]) -> f64 {
+        let nb = self.nb;
+        let joints: f64 = (0..nb).map(|k| (self.p_b[k] * offset[k]).abs()).sum();
+        let contacts: f64 = (0..self.nc)
+            .map(|i| (self.z[i] * offset[nb + i].min(0.0)).abs())
+            .sum();
+        joints + contacts
     }
 
     /// Cuts the problem down to the contacts still marked `in_lcp` (the

@@ -14,6 +14,7 @@
 pub mod applied;
 pub mod collision;
 pub mod contact;
+pub mod fallback;
 pub mod integrate;
 pub mod measure;
 pub mod mlcp;
@@ -26,17 +27,19 @@ pub mod solver;
 pub mod state;
 
 pub use applied::{InputError, Inputs};
+pub use fallback::Fallback;
 pub use model::{Attachment, Model, Skips};
-pub use report::{Lap, StepError, StepReport, Timings};
+pub use report::{LadderCounts, Lap, StepError, StepReport, Timings};
 pub use state::{BodyState, State};
 
 use applied::InvMass;
 use collision::{Counterpart, Geometry};
 use contact::Contact;
 use cosim_shared::SolverChoice;
+use mlcp::Offsets;
 use mlcp::{Assembly, Mlcp};
 use nalgebra::Vector3;
-use solver::{Lcp, Lemke, LemkeError, Pgs, PgsParams, PgsProblem};
+use solver::{Lcp, Lemke, LemkeError, Pgs, PgsParams, PgsProblem, Rung};
 
 /// With `solver = "auto"`, LCPs larger than this go to PGS alone. Measured
 /// on piles of spheres in a box (h = 5e-3, n_d = 8, 200 steps, this
@@ -136,6 +139,7 @@ struct Workspace {
     /// friction blocks as `(slack, first row, n_d)`.
     guess: Vec<bool>,
     slacks: Vec<(usize, usize, usize)>,
+    fallback: fallback::Scratch,
 }
 
 impl Workspace {
@@ -386,6 +390,11 @@ impl Engine {
             resolves: 0,
             not_converged: false,
             regularized: 0,
+            refined: 0,
+            rung: Rung::Other,
+            fallback: None,
+            energy_refused: false,
+            energy_allowance: 0.0,
             projected: std::mem::take(&mut self.projected),
             early_matrix: false,
             max_penetration: 0.0,
@@ -460,7 +469,7 @@ impl Engine {
                     )
                     .map_err(StepError::Mlcp)?;
                 report.early_matrix |= report.resolves == 0 && !canonical && how != Assembly::Built;
-                ws.mlcp.rhs(&ws.nu_free, &ws.contacts, p);
+                ws.mlcp.rhs(&ws.nu_free, &ws.contacts, p, Offsets::Full);
                 report.regularized += usize::from(ws.mlcp.joint_regularized);
             }
             // Pruning, the velocity checks and the cuts count as assembly.
@@ -471,11 +480,6 @@ impl Engine {
                 let n = m.lcp_size();
                 m.z.clear();
                 m.z.resize(n, 0.0);
-                let lcp = Lcp {
-                    n,
-                    m: &m.lcp_m,
-                    q: &m.lcp_q,
-                };
                 report.lcp_size = report.lcp_size.max(n);
                 report.contacts_in_lcp = report.contacts_in_lcp.max(m.nc);
                 let mut use_pgs = match p.solver {
@@ -492,6 +496,11 @@ impl Engine {
                     // The last step's support first, carried over by
                     // contact identity: a resting or steadily sliding
                     // contact keeps it, and then no pivoting is needed.
+                    let lcp = Lcp {
+                        n,
+                        m: &m.lcp_m,
+                        q: &m.lcp_q,
+                    };
                     let guessed = if p.skips.lemke_guess
                         && carry_guess(&self.state, m, &ws.contacts, &mut ws.guess)
                     {
@@ -504,16 +513,30 @@ impl Engine {
                     } else {
                         None
                     };
-                    let solved = match guessed {
-                        Some(info) => Ok(info),
-                        None => self.lemke.solve(&lcp, &mut m.z),
-                    };
+                    let solved = fallback::solve(
+                        &mut self.lemke,
+                        m,
+                        guessed,
+                        fallback::Step {
+                            nu_free: &ws.nu_free,
+                            contacts: &ws.contacts,
+                            params: p,
+                        },
+                        &mut ws.nu,
+                        &mut ws.fallback,
+                    );
                     match solved {
-                        Ok(info) => {
+                        Ok(s) => {
+                            let info = s.info;
                             report.pivots += info.work;
-                            report.regularized += usize::from(info.regularized);
+                            report.regularized += usize::from(info.regularized());
+                            report.refined += usize::from(info.refined);
+                            report.rung = report.rung.max_by_ladder(info.rung);
+                            report.fallback = Fallback::max(report.fallback, s.fallback);
+                            report.energy_refused |= s.energy_refused;
+                            // The last solve's answer is the step's.
+                            report.energy_allowance = s.allowance;
                             report.residual = report.residual.max(info.residual);
-                            m.recover(&ws.nu_free, &mut ws.nu);
                         }
                         // auto: the fallback the step report names.
                         Err(

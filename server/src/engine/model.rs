@@ -91,6 +91,11 @@ pub struct Params {
     /// needs more fails with `pivot_limit` (and `auto` solves it with PGS),
     /// bounding a step's time. None: Lemke's own cap.
     pub lemke_max_pivots: Option<usize>,
+    /// Where the rigid LCP has no solution Lemke finds, fall back to the
+    /// relaxed and then the compliant formulation (`engine::fallback`),
+    /// and refuse rigid answers that add energy. Off: such a step fails
+    /// and the state stays (`serve --on-failure pause|abort`).
+    pub fallback: bool,
     pub position_update: cosim_shared::PositionUpdate,
 }
 
@@ -246,6 +251,7 @@ impl Model {
                 sphere_contacts: s.sphere_contacts,
                 skips: Skips::default(),
                 lemke_max_pivots: None,
+                fallback: true,
                 position_update: s.position_update,
             },
             initial,

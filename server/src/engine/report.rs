@@ -1,8 +1,9 @@
 //! The step report: what every step says about itself.
 
+use super::fallback::Fallback;
 use super::measure::Energy;
 use super::mlcp::MlcpError;
-use super::solver::LemkeError;
+use super::solver::{LemkeError, Rung};
 use std::time::Instant;
 
 /// Why a step failed. The state is left as it was before the step.
@@ -111,6 +112,24 @@ pub struct StepReport {
     /// plus builds whose joint block was singular (redundant joints) and
     /// was regularised (see `mlcp::reduce_joints`).
     pub regularized: usize,
+    /// Lemke answers taken from the final basis factored again
+    /// (`Lemke::refine`): the tableau's had lost digits.
+    pub refined: usize,
+    /// The highest rung of Lemke's ladder a solve of the step needed
+    /// (`Other`: no Lemke solve, e.g. PGS).
+    pub rung: Rung,
+    /// The formulation the step fell back to where the rigid LCP has no
+    /// solution Lemke finds (see `engine::fallback`); `None`: rigid.
+    pub fallback: Option<Fallback>,
+    /// A rigid answer was found but gave more kinetic energy than the
+    /// stabilisation may (`fallback::energy_plausible`), so the step fell
+    /// back.
+    pub energy_refused: bool,
+    /// The kinetic energy over the free motion's that the step's answer
+    /// was allowed by the energy check (J; `fallback::Solved::allowance`):
+    /// what the stabilisation may have given. Zero for a fallback and for
+    /// the iterative solver (not checked).
+    pub energy_allowance: f64,
     /// Contacts that started the step deeper than `project::PENETRATION_SLOP`
     /// and were projected out (positions moved, velocities kept).
     pub projected: usize,
@@ -134,5 +153,49 @@ impl StepReport {
             None if self.not_converged => "not_converged",
             None => "solved",
         }
+    }
+}
+
+/// Per-run counts of the solve ladder (see `engine::fallback`), from the
+/// step reports: what a user reads to see how often each rung was needed.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LadderCounts {
+    /// Steps by the highest rung of Lemke's ladder they needed, indexed as
+    /// [`Rung::LADDER`].
+    pub rungs: [u64; 5],
+    /// Steps with an answer refined from its final basis.
+    pub refined: u64,
+    /// Steps that fell back to the relaxed formulation, and to the
+    /// compliant one (with the largest compliance used).
+    pub relaxed: u64,
+    pub compliant: u64,
+    pub max_compliance: f64,
+    /// Steps whose rigid answer the energy check refused.
+    pub energy_refused: u64,
+}
+
+impl LadderCounts {
+    pub fn add(&mut self, r: &StepReport) {
+        if r.error.is_some() {
+            return;
+        }
+        if let Some(i) = r.rung.index() {
+            self.rungs[i] += 1;
+        }
+        self.refined += u64::from(r.refined > 0);
+        match r.fallback {
+            Some(Fallback::Relaxed) => self.relaxed += 1,
+            Some(Fallback::Compliant { eps }) => {
+                self.compliant += 1;
+                self.max_compliance = self.max_compliance.max(eps);
+            }
+            None => {}
+        }
+        self.energy_refused += u64::from(r.energy_refused);
+    }
+
+    /// Steps that did not solve the rigid LCP of formulation.md.
+    pub fn fell_back(&self) -> u64 {
+        self.relaxed + self.compliant
     }
 }

@@ -99,7 +99,9 @@ impl RunData {
             for (name, v) in header.iter().zip(&cols) {
                 if let Ok(x) = v.parse::<f64>() {
                     data.steps.entry(name.clone()).or_default().push(x);
-                } else if !v.is_empty() && name != "solver" && name != "status" {
+                } else if !v.is_empty()
+                    && !["solver", "status", "rung", "fallback"].contains(&name.as_str())
+                {
                     return Err(PlotError::Read(format!(
                         "steps.csv:{}: {name} = {v:?} is not a number",
                         k + 2

@@ -17,6 +17,35 @@ pub enum MissPolicy {
     Abort,
 }
 
+/// What a step that fails does to the run (`serve --on-failure`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Default)]
+pub enum FailurePolicy {
+    /// Steps where the rigid LCP has no solution go on with the engine's
+    /// fallback formulations (relaxed, then compliant; reported, status bit
+    /// `STATUS_FELL_BACK`). A step that no formulation solves pauses the
+    /// run at that state (nothing but a command or a reset can change it):
+    /// it is never re-run in a loop.
+    #[default]
+    Continue,
+    /// Rigid answers only: a step whose rigid LCP fails is not taken, and
+    /// the run pauses at the state before it (`STATUS_SOLVER_FAILED` and
+    /// `STATUS_PAUSED`) until `cosim resume`, `step`, `reset` or `restore`.
+    Pause,
+    /// Rigid answers only: the run stops at the first failed step; its
+    /// files hold every step before it.
+    Abort,
+}
+
+impl FailurePolicy {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            FailurePolicy::Continue => "continue",
+            FailurePolicy::Pause => "pause",
+            FailurePolicy::Abort => "abort",
+        }
+    }
+}
+
 impl MissPolicy {
     /// The input a rejected answer gets: the policy's, except that pause
     /// and abort (which are about silence) hold.

@@ -81,6 +81,9 @@ pub fn fill(f: &mut StateFrame, engine: &Engine, report: Option<&StepReport>) {
         if r.error.is_some() {
             f.status |= STATUS_SOLVER_FAILED;
         }
+        if r.fallback.is_some() {
+            f.status |= cosim_shared::wire::STATUS_FELL_BACK;
+        }
     }
 }
 

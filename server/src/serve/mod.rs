@@ -41,6 +41,7 @@ pub struct ServeOptions {
     pub controllers: usize,
     pub deadline: Duration,
     pub on_miss: MissPolicy,
+    pub on_failure: controllers::FailurePolicy,
     pub wait: WaitMode,
     /// Consecutive misses after which a live but silent controller is
     /// dropped.
@@ -84,6 +85,8 @@ pub enum Ending {
     Signal,
     /// A deadline miss under `--on-miss abort`.
     Aborted,
+    /// A failed step under `--on-failure abort`.
+    Failed,
 }
 
 /// Errors that stop a serve run before or during it.
@@ -132,8 +135,13 @@ struct Files {
 /// What a run counted; it becomes `summary.json`.
 #[derive(Debug, Default, Clone)]
 pub struct Counters {
+    /// Steps taken (a failed step is not one: the state did not advance).
     pub steps: u64,
+    /// Failed steps, each counted once (the policy pauses or stops the
+    /// run, so a step is tried again only after a command).
     pub failures: u64,
+    /// The solve ladder's counts, fallbacks included (`engine::fallback`).
+    pub ladder: crate::engine::LadderCounts,
     pub controllers_joined: u64,
     pub controllers_dropped: u64,
     pub inputs_applied: u64,
@@ -213,12 +221,15 @@ struct Server {
     applied: Vec<[f64; 3]>,
     scene_torque: Vec<[f64; 3]>,
     c: Counters,
+    /// A failed step under `--on-failure abort`: the loop stops.
+    failed_stop: bool,
 }
 
 /// Runs a server on `scene` until `--steps`, a shutdown request or a
 /// signal.
 pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64), ServeError> {
-    let model = Model::from_scene(scene);
+    let mut model = Model::from_scene(scene);
+    model.params.fallback = opts.on_failure == controllers::FailurePolicy::Continue;
     for (what, count, max) in [
         ("bodies", model.bodies.len(), MAX_BODIES),
         ("joints", model.joints.len(), MAX_JOINTS),
@@ -268,6 +279,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         applied: scene_torque.clone(),
         scene_torque,
         c: Counters::default(),
+        failed_stop: false,
         engine,
         svc,
         opts,
@@ -384,6 +396,10 @@ impl Server {
                 continue;
             }
             let compute = self.take_step(k)?;
+            if self.failed_stop {
+                self.publish()?;
+                return Ok(Ending::Failed);
+            }
             let t_publish = Instant::now();
             self.c
                 .phases
@@ -660,18 +676,43 @@ impl Server {
         if let Some(f) = self.files.as_mut() {
             f.logs.step(k, frame::state_hash(&self.engine))?;
         }
-        self.c.steps += 1;
         self.c.max_penetration = self.c.max_penetration.max(report.max_penetration);
         self.c.max_joint_error = self.c.max_joint_error.max(report.max_joint_error);
         self.c.projected_contacts += report.projected as u64;
         self.c.early_matrix_steps += u64::from(report.early_matrix);
+        self.c.ladder.add(&report);
         if let Some(e) = report.error {
+            // NOTE: the policy stops the loop from taking this step again
+            // with the same inputs (a re-run gives the same failure): it
+            // pauses or stops, and the failure is counted and logged once.
             self.c.failures += 1;
+            let policy = self.opts.on_failure;
             tracing::error!(
-                "step {}: the solver failed ({e}); the state did not advance",
-                k + 1
+                "step {}: the solver failed ({e}); the state did not advance; --on-failure {}: {}",
+                k + 1,
+                policy.as_str(),
+                match policy {
+                    controllers::FailurePolicy::Abort => "stopping",
+                    _ => "paused until resume, step, reset or restore",
+                }
             );
+            match policy {
+                controllers::FailurePolicy::Abort => self.failed_stop = true,
+                _ => self.paused = true,
+            }
         } else {
+            self.c.steps += 1;
+            if let Some(fb) = report.fallback {
+                // Rate-limited: the first, then every 1000th.
+                let n = self.c.ladder.fell_back();
+                if n == 1 || n.is_multiple_of(1000) {
+                    tracing::warn!(
+                        "step {}: the rigid LCP has no solution the solver finds; the step went on {} ({n} such steps so far)",
+                        k + 1,
+                        fb.as_str()
+                    );
+                }
+            }
             if let Some(f) = self.files.as_mut() {
                 f.writers.state(&self.engine)?;
             }
@@ -930,6 +971,9 @@ impl Server {
             "solver": self.engine.model().params.solver.as_str(),
             "model_hash": format!("{:016x}", self.model_hash),
             "failures": c.failures,
+            "on_failure": self.opts.on_failure.as_str(),
+            "ladder": crate::output::ladder_json(&c.ladder),
+            "fallback_steps": c.ladder.fell_back(),
             "controllers_joined": c.controllers_joined,
             "controllers_dropped": c.controllers_dropped,
             "inputs_applied": c.inputs_applied,

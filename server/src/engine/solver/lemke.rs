@@ -30,10 +30,22 @@
 use super::{relative_residual, Lcp, SolveInfo};
 
 const Q_SNAP: f64 = 1e-13;
-const PIVOT_TOL: f64 = 1e-9;
+/// The pivot tolerances of the ladder's first rungs, relative to the
+/// entering column's largest entry (rule 2): each rung is a whole new run
+/// of the algorithm, verified on its own.
+///
+/// Why a ladder and not one value: 1e-9 guards against pivoting on
+/// round-off in large degenerate problems (the Siconos corpus needs it),
+/// but it rejected the right pivot (1.18e-7, 5.0e-10 of its column's
+/// largest entry) at pivot 21 of a 20-unknown LCP of the reference scene
+/// (step 154,952; numerical rank 8 of 20), whose path then ended on a ray.
+/// 1e-10 .. 1e-14 solve it in 22 pivots; a tolerance of 0 breaks the
+/// corpus's `tobenna`. So the loose value goes first and the tight ones
+/// only where it failed.
+pub const PIVOT_TOLS: [f64; 3] = [1e-9, 1e-11, 1e-13];
 const RHS_SNAP: f64 = 1e-13;
 const TIE_TOL: f64 = 1e-9;
-/// Relative diagonal shift of the regularised retry (see [`Lemke::solve`]).
+/// Relative diagonal shift of the regularised rung (see [`Lemke::solve`]).
 /// Smaller shifts leave the problem nearly as degenerate and round-off then
 /// spoils the path (seen: 1e-10 and 1e-9 end with residuals of 5e-7 and
 /// 1e-6 on a closed loop of joints and contacts; 1e-8 with 2.7e-8 in 20
@@ -44,11 +56,74 @@ pub const REGULARIZATION: f64 = 1e-8;
 pub const REGULARIZED_VERIFY_TOL: f64 = 1e-6;
 /// Largest accepted relative residual of a returned solution.
 pub const VERIFY_TOL: f64 = 1e-8;
+/// A pivoted answer with a residual above this is refined: the final basis
+/// is factored again from the original data (see [`Lemke::refine`]).
+/// Below it, the tableau's answer is as good as a refactorisation's, and
+/// the common path costs nothing more.
+const REFINE_ABOVE: f64 = 1e-12;
 
 /// `Q_SNAP max |q_i|`: entries of `q` (and values computed from it) at or
 /// below this are round-off.
 fn q_snap(lcp: &Lcp) -> f64 {
     Q_SNAP * lcp.q.iter().fold(0.0f64, |a, &b| a.max(b.abs()))
+}
+
+/// Which rung of [`Lemke::solve`]'s ladder gave the answer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Rung {
+    /// The last step's support (see [`Lemke::solve_guess`]): no pivoting.
+    Guess,
+    /// A pivoted run with pivot tolerance `PIVOT_TOLS[k]` (`z = 0` when
+    /// `q >= 0` counts as `Pivoted(0)` with no pivot).
+    Pivoted(u8),
+    /// A pivoted run on `M + eps I` (see [`REGULARIZATION`]).
+    Regularized,
+    /// Not from Lemke (an iterative solver's answer).
+    #[default]
+    Other,
+}
+
+impl Rung {
+    /// A short name for step reports and summaries.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Rung::Guess => "guess",
+            Rung::Pivoted(0) => "pivot_1e-9",
+            Rung::Pivoted(1) => "pivot_1e-11",
+            Rung::Pivoted(_) => "pivot_1e-13",
+            Rung::Regularized => "regularized",
+            Rung::Other => "other",
+        }
+    }
+
+    /// Every rung Lemke reports, in ladder order: the keys of the per-run
+    /// counts.
+    pub const LADDER: [Rung; 5] = [
+        Rung::Guess,
+        Rung::Pivoted(0),
+        Rung::Pivoted(1),
+        Rung::Pivoted(2),
+        Rung::Regularized,
+    ];
+
+    /// The higher of two rungs on the ladder (`Other` is below all).
+    pub fn max_by_ladder(self, other: Rung) -> Rung {
+        if other.index() > self.index() {
+            other
+        } else {
+            self
+        }
+    }
+
+    /// Index into [`Rung::LADDER`] (None for `Other`).
+    pub fn index(self) -> Option<usize> {
+        match self {
+            Rung::Guess => Some(0),
+            Rung::Pivoted(k) => Some(1 + usize::from(k.min(2))),
+            Rung::Regularized => Some(4),
+            Rung::Other => None,
+        }
+    }
 }
 
 /// How Lemke's algorithm failed, with the data that shows it.
@@ -99,11 +174,18 @@ pub struct Lemke {
     ties: Vec<usize>,
     /// A lower pivot cap than [`pivot_limit`] (`Params::lemke_max_pivots`).
     pub max_pivots: Option<usize>,
-    /// Scratch of [`Lemke::solve_guess`]: the guessed indices, `M_SS` and
-    /// the right-hand side.
-    guess: Vec<usize>,
+    /// Scratch of [`Lemke::solve_support`]: the support, `M_SS` and its LU
+    /// factors with their row order, the solution and the refinement's
+    /// residual.
+    support: Vec<usize>,
+    a: Vec<f64>,
     lu: Vec<f64>,
-    rhs: Vec<f64>,
+    perm: Vec<usize>,
+    x: Vec<f64>,
+    res: Vec<f64>,
+    dx: Vec<f64>,
+    /// The refined candidate.
+    zr: Vec<f64>,
 }
 
 impl Lemke {
@@ -119,37 +201,173 @@ impl Lemke {
         }
     }
 
-    /// Solves `0 <= M z + q _|_ z >= 0` into `z`.
+    /// Solves `0 <= M z + q _|_ z >= 0` into `z`, climbing a ladder of
+    /// attempts, each a full run verified against the original `M, q`:
     ///
-    /// When the pivoting fails, it is repeated once on `M + eps I`,
-    /// `eps = REGULARIZATION * max |M_ij|` (a constraint-force mixing, as ODE
-    /// calls it). A copositive `M` (every contact LCP of the engine is one)
-    /// becomes strictly copositive, for which Lemke's method cannot end on a
-    /// ray: the homogeneous solutions that make contact LCPs degenerate (a far
-    /// contact's free slack, the indeterminate internal impulses of a closed
-    /// loop of joints and contacts) are gone. Its answer solves the original
-    /// problem up to `w = -eps z`, so it is verified against the original
-    /// `M, q` with the looser [`REGULARIZED_VERIFY_TOL`], and the info says
-    /// it was regularised. When it fails too, the first error is returned.
+    /// 1. pivot tolerance `PIVOT_TOLS[0]`, then the tighter ones (see
+    ///    [`PIVOT_TOLS`]); every pivoted answer whose residual is above
+    ///    round-off is refined from its final basis ([`Lemke::refine`]);
+    /// 2. `M + eps I`, `eps = REGULARIZATION * max |M_ij|` (a constraint-force
+    ///    mixing, as ODE calls it). A copositive `M` (every contact LCP of the
+    ///    engine is one) becomes strictly copositive, for which Lemke's method
+    ///    cannot end on a ray: the homogeneous solutions that make contact
+    ///    LCPs degenerate (a far contact's free slack, the indeterminate
+    ///    internal impulses of a closed loop of joints and contacts) are gone.
+    ///    Its answer solves the original problem up to `w = -eps z`, so it is
+    ///    verified against the original `M, q` with the looser
+    ///    [`REGULARIZED_VERIFY_TOL`], and the rung says it was regularised.
+    ///
+    /// When every rung fails, the first rung's error is returned (the
+    /// others' are of the same problem with other settings).
     pub fn solve(&mut self, lcp: &Lcp, z: &mut [f64]) -> Result<SolveInfo, LemkeError> {
-        let first = match self.solve_plain(lcp, z) {
-            Ok(info) => return Ok(info),
-            Err(e) => e,
-        };
+        let mut first = None;
+        for (k, &tol) in PIVOT_TOLS.iter().enumerate() {
+            match self.run(lcp, z, 0.0, tol, VERIFY_TOL) {
+                Ok(info) => {
+                    return Ok(SolveInfo {
+                        rung: Rung::Pivoted(k as u8),
+                        ..info
+                    })
+                }
+                Err(e) => {
+                    first.get_or_insert(e);
+                }
+            }
+        }
         let eps = REGULARIZATION * lcp.m.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-        match self.solve_shifted(lcp, z, eps, REGULARIZED_VERIFY_TOL) {
+        match self.run(lcp, z, eps, PIVOT_TOLS[0], REGULARIZED_VERIFY_TOL) {
             Ok(info) => Ok(SolveInfo {
-                regularized: true,
+                rung: Rung::Regularized,
                 ..info
             }),
-            Err(_) => Err(first),
+            Err(e) => Err(first.unwrap_or(e)),
         }
     }
 
+    /// Lemke on `M + shift I` with pivot tolerance `pivot_tol`, its answer
+    /// refined when it is not at round-off, and verified against `M, q`
+    /// to the relative residual `tol` (the rung is left for the caller).
+    pub fn solve_shifted(
+        &mut self,
+        lcp: &Lcp,
+        z: &mut [f64],
+        shift: f64,
+        pivot_tol: f64,
+    ) -> Result<SolveInfo, LemkeError> {
+        self.run(lcp, z, shift, pivot_tol, VERIFY_TOL)
+    }
+
+    fn run(
+        &mut self,
+        lcp: &Lcp,
+        z: &mut [f64],
+        shift: f64,
+        pivot_tol: f64,
+        tol: f64,
+    ) -> Result<SolveInfo, LemkeError> {
+        let pivots = self.pivoting(lcp, z, shift, pivot_tol)?;
+        let mut residual = relative_residual(lcp, &z[..lcp.n]);
+        let mut refined = false;
+        if residual > REFINE_ABOVE {
+            if let Some(r) = self.refine(lcp, z, shift, residual) {
+                residual = r;
+                refined = true;
+            }
+        }
+        if residual <= tol {
+            Ok(SolveInfo {
+                work: pivots,
+                rung: Rung::Other,
+                refined,
+                residual,
+            })
+        } else {
+            Err(LemkeError::NumericalBreakdown { pivots, residual })
+        }
+    }
+
+    /// The final basis factored again from the original data: with `S` the
+    /// `z` basic at the end of the path, solves `(M + shift I)_SS z_S = -q_S`
+    /// by LU with partial pivoting and one step of iterative refinement.
+    /// The tableau carries every pivot's round-off (a path of 20 pivots
+    /// through a matrix of condition 1e19 loses most digits); the basis it
+    /// found is usually right even where its numbers are not. Replaces `z`
+    /// and returns the new residual when that is smaller than `residual`.
+    fn refine(&mut self, lcp: &Lcp, z: &mut [f64], shift: f64, residual: f64) -> Option<f64> {
+        let n = lcp.n;
+        self.support.clear();
+        self.support.extend(
+            self.basis
+                .iter()
+                .filter(|&&v| (n..2 * n).contains(&v))
+                .map(|&v| v - n),
+        );
+        self.support.sort_unstable();
+        let mut zr = std::mem::take(&mut self.zr);
+        zr.clear();
+        zr.resize(n, 0.0);
+        let better = self.solve_support(lcp, shift, &mut zr) && {
+            zr.iter_mut().for_each(|x| *x = x.max(0.0));
+            relative_residual(lcp, &zr) < residual
+        };
+        let out = better.then(|| {
+            z[..n].copy_from_slice(&zr);
+            relative_residual(lcp, &zr)
+        });
+        self.zr = zr;
+        out
+    }
+
+    /// `(M + shift I)_SS z_S = -q_S` for `S = self.support` into `z` (zero
+    /// elsewhere): LU with partial pivoting, then one step of iterative
+    /// refinement with the residual formed from the original data. False
+    /// when a pivot is below round-off of the block's scale, a value is not
+    /// finite or an entry of `z_S` is negative (the support is not a
+    /// solution's).
+    fn solve_support(&mut self, lcp: &Lcp, shift: f64, z: &mut [f64]) -> bool {
+        let n = lcp.n;
+        let s = self.support.len();
+        z[..n].fill(0.0);
+        if s == 0 {
+            return true;
+        }
+        self.a.clear();
+        for (r, &i) in self.support.iter().enumerate() {
+            for (c, &j) in self.support.iter().enumerate() {
+                self.a
+                    .push(lcp.m[i * n + j] + if r == c { shift } else { 0.0 });
+            }
+        }
+        self.lu.clear();
+        self.lu.extend_from_slice(&self.a);
+        if !lu_factor(&mut self.lu, s, &mut self.perm) {
+            return false;
+        }
+        // x = A^-1 b with b = -q_S, then x += A^-1 (b - A x), the residual
+        // from the original rows.
+        self.res.clear();
+        self.res.extend(self.support.iter().map(|&i| -lcp.q[i]));
+        lu_solve(&self.lu, s, &self.perm, &self.res, &mut self.x);
+        for t in 0..s {
+            let row = &self.a[t * s..(t + 1) * s];
+            let ax: f64 = row.iter().zip(&self.x).map(|(a, b)| a * b).sum();
+            self.res[t] -= ax;
+        }
+        lu_solve(&self.lu, s, &self.perm, &self.res, &mut self.dx);
+        for (t, &i) in self.support.iter().enumerate() {
+            let v = self.x[t] + self.dx[t];
+            if v.is_nan() || v < 0.0 {
+                return false;
+            }
+            z[i] = v;
+        }
+        true
+    }
+
     /// Tries a guess of the solution's support before any pivoting: with
-    /// `S = {i : active[i]}`, solves `M_SS z_S = -q_S` (Gaussian elimination
-    /// with partial pivoting), `z = 0` elsewhere, and accepts `z` only when
-    /// it is nonnegative and passes the same verification as a pivoted
+    /// `S = {i : active[i]}`, solves `M_SS z_S = -q_S` (see
+    /// [`Lemke::solve_support`]), `z = 0` elsewhere, and accepts `z` only
+    /// when it is nonnegative and passes the same verification as a pivoted
     /// answer (`VERIFY_TOL` against `M, q`: `w_S = 0` and `w >= 0` elsewhere
     /// up to it). `None` when the guess fails; then nothing is claimed and
     /// the caller pivots.
@@ -177,55 +395,10 @@ impl Lemke {
         if active.len() != n {
             return None;
         }
-        self.guess.clear();
-        self.guess.extend((0..n).filter(|&i| active[i]));
-        let s = self.guess.len();
-        if s == 0 {
+        self.support.clear();
+        self.support.extend((0..n).filter(|&i| active[i]));
+        if self.support.is_empty() || !self.solve_support(lcp, 0.0, z) {
             return None;
-        }
-        self.lu.clear();
-        self.rhs.clear();
-        for &i in &self.guess {
-            self.rhs.push(-lcp.q[i]);
-            for &j in &self.guess {
-                self.lu.push(lcp.m[i * n + j]);
-            }
-        }
-        let scale = self.lu.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-        let (a, b) = (&mut self.lu, &mut self.rhs);
-        for k in 0..s {
-            let p = (k..s)
-                .max_by(|&x, &y| a[x * s + k].abs().total_cmp(&a[y * s + k].abs()))
-                .unwrap_or(k);
-            if a[p * s + k].abs() <= PIVOT_TOL * scale {
-                return None;
-            }
-            if p != k {
-                for c in 0..s {
-                    a.swap(k * s + c, p * s + c);
-                }
-                b.swap(k, p);
-            }
-            for r in k + 1..s {
-                let f = a[r * s + k] / a[k * s + k];
-                if f != 0.0 {
-                    for c in k..s {
-                        a[r * s + c] -= f * a[k * s + c];
-                    }
-                    b[r] -= f * b[k];
-                }
-            }
-        }
-        for k in (0..s).rev() {
-            let t: f64 = (k + 1..s).map(|c| a[k * s + c] * b[c]).sum();
-            b[k] = (b[k] - t) / a[k * s + k];
-        }
-        z[..n].fill(0.0);
-        for (t, &i) in self.guess.iter().enumerate() {
-            if b[t].is_nan() || b[t] < 0.0 {
-                return None;
-            }
-            z[i] = b[t];
         }
         // A sliding speed at the round-off of the data is a sticking
         // contact: filled in as 1e-19 it marks the slack active, the next
@@ -246,43 +419,46 @@ impl Lemke {
         let residual = relative_residual(lcp, &z[..n]);
         (residual <= VERIFY_TOL).then_some(SolveInfo {
             work: 0,
-            regularized: false,
+            rung: Rung::Guess,
+            refined: false,
             residual,
         })
     }
 
     /// Lemke's method as the textbook has it (with the floating-point care
-    /// above), without the regularised retry: what the solver corpus checks.
+    /// above and the first rung's pivot tolerance), without the rest of the
+    /// ladder: what the solver corpus checks.
     pub fn solve_plain(&mut self, lcp: &Lcp, z: &mut [f64]) -> Result<SolveInfo, LemkeError> {
-        self.solve_shifted(lcp, z, 0.0, VERIFY_TOL)
+        self.run(lcp, z, 0.0, PIVOT_TOLS[0], VERIFY_TOL)
+            .map(|info| SolveInfo {
+                rung: Rung::Pivoted(0),
+                ..info
+            })
     }
 
-    /// Lemke on `M + shift I`, verified against the original `M, q` to the
-    /// relative residual `tol`.
-    fn solve_shifted(
+    /// The pivoting itself on `M + shift I`: the tableau's `z` into `z`
+    /// and the number of pivots, unverified.
+    fn pivoting(
         &mut self,
         lcp: &Lcp,
         z: &mut [f64],
         shift: f64,
-        tol: f64,
-    ) -> Result<SolveInfo, LemkeError> {
+        pivot_tol: f64,
+    ) -> Result<usize, LemkeError> {
         let n = lcp.n;
         z[..n].fill(0.0);
+        self.basis.clear();
         let snap = q_snap(lcp);
         // The trivial case costs nothing: z = 0 solves it when q >= 0.
         if shift == 0.0 && lcp.q.iter().all(|&qi| qi >= -snap) {
-            return Ok(SolveInfo {
-                work: 0,
-                regularized: false,
-                residual: relative_residual(lcp, &z[..n]),
-            });
+            self.basis.extend(0..n);
+            return Ok(0);
         }
 
         let width = 2 * n + 2;
         let (z0, rhs) = (2 * n, 2 * n + 1);
         self.tableau.clear();
         self.tableau.resize(n * width, 0.0);
-        self.basis.clear();
         for i in 0..n {
             let row = &mut self.tableau[i * width..(i + 1) * width];
             row[i] = 1.0;
@@ -324,7 +500,7 @@ impl Lemke {
             } else {
                 leaving - n
             };
-            let r = match self.ratio_test(n, entering) {
+            let r = match self.ratio_test(n, entering, pivot_tol) {
                 Some(r) => r,
                 None => return Err(LemkeError::RayTermination { pivots, entering }),
             };
@@ -348,20 +524,11 @@ impl Lemke {
                 z[var - n] = self.tableau[i * width + rhs].max(0.0);
             }
         }
-        let residual = relative_residual(lcp, &z[..n]);
-        if residual <= tol {
-            Ok(SolveInfo {
-                work: pivots,
-                regularized: false,
-                residual,
-            })
-        } else {
-            Err(LemkeError::NumericalBreakdown { pivots, residual })
-        }
+        Ok(pivots)
     }
 
     /// The row that leaves when column `col` enters, or `None` on a ray.
-    fn ratio_test(&mut self, n: usize, col: usize) -> Option<usize> {
+    fn ratio_test(&mut self, n: usize, col: usize, pivot_tol: f64) -> Option<usize> {
         let width = 2 * n + 2;
         let rhs = width - 1;
         let t = &self.tableau;
@@ -377,7 +544,7 @@ impl Lemke {
         };
         let mut theta = f64::INFINITY;
         for i in 0..n {
-            if t[i * width + col] > PIVOT_TOL * dmax {
+            if t[i * width + col] > pivot_tol * dmax {
                 theta = theta.min(ratio(i));
             }
         }
@@ -391,7 +558,7 @@ impl Lemke {
             // round-off on the column's scale (two rows that are equal but for
             // round-off, e.g. z0's and a degenerate twin, must tie).
             let d = t[i * width + col];
-            if d > PIVOT_TOL * dmax && ratio(i) <= theta * (1.0 + TIE_TOL) + RHS_SNAP * rmax / d {
+            if d > pivot_tol * dmax && ratio(i) <= theta * (1.0 + TIE_TOL) + RHS_SNAP * rmax / d {
                 self.ties.push(i);
             }
         }
@@ -438,6 +605,55 @@ impl Lemke {
                 row[col] = 0.0;
             }
         }
+    }
+}
+
+/// `A = P^-1 L U` in place (row-major `s x s`, unit lower `L` below the
+/// diagonal), partial pivoting; `perm[k]` is the original row now at `k`.
+/// False when a pivot is at or below `PIVOT_TOLS[0]` of the largest entry
+/// (a singular block at this precision) or not finite.
+fn lu_factor(lu: &mut [f64], s: usize, perm: &mut Vec<usize>) -> bool {
+    let scale = lu.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    perm.clear();
+    perm.extend(0..s);
+    for k in 0..s {
+        let p = (k..s)
+            .max_by(|&x, &y| lu[x * s + k].abs().total_cmp(&lu[y * s + k].abs()))
+            .unwrap_or(k);
+        let d = lu[p * s + k];
+        if d.is_nan() || d.abs() <= PIVOT_TOLS[0] * scale || !d.is_finite() {
+            return false;
+        }
+        if p != k {
+            for c in 0..s {
+                lu.swap(k * s + c, p * s + c);
+            }
+            perm.swap(k, p);
+        }
+        for r in k + 1..s {
+            let f = lu[r * s + k] / d;
+            lu[r * s + k] = f;
+            if f != 0.0 {
+                for c in k + 1..s {
+                    lu[r * s + c] -= f * lu[k * s + c];
+                }
+            }
+        }
+    }
+    true
+}
+
+/// `x = A^-1 b` with the factors of [`lu_factor`].
+fn lu_solve(lu: &[f64], s: usize, perm: &[usize], b: &[f64], x: &mut Vec<f64>) {
+    x.clear();
+    x.extend(perm.iter().map(|&p| b[p]));
+    for i in 0..s {
+        let t: f64 = (0..i).map(|k| lu[i * s + k] * x[k]).sum();
+        x[i] -= t;
+    }
+    for i in (0..s).rev() {
+        let t: f64 = (i + 1..s).map(|k| lu[i * s + k] * x[k]).sum();
+        x[i] = (x[i] - t) / lu[i * s + i];
     }
 }
 

@@ -8,7 +8,7 @@
 pub mod lemke;
 pub mod pgs;
 
-pub use lemke::{Lemke, LemkeError};
+pub use lemke::{Lemke, LemkeError, Rung};
 pub use pgs::{Pgs, PgsInfo, PgsParams, PgsProblem};
 
 /// A dense LCP `0 <= M z + q _|_ z >= 0`, `M` row-major `n x n`.
@@ -24,10 +24,21 @@ pub struct Lcp<'a> {
 pub struct SolveInfo {
     /// Pivots (Lemke) or iterations (iterative solvers).
     pub work: usize,
-    /// The answer came from a regularised retry (Lemke on `M + eps I`).
-    pub regularized: bool,
+    /// Which rung of Lemke's ladder gave the answer (`Other` for the
+    /// iterative solvers).
+    pub rung: lemke::Rung,
+    /// The answer came from the final basis factored again (see
+    /// `Lemke::refine`), not the tableau.
+    pub refined: bool,
     /// Natural-map residual relative to `||q||` (see [`relative_residual`]).
     pub residual: f64,
+}
+
+impl SolveInfo {
+    /// The answer is of `M + eps I`, not `M` (Lemke's regularised rung).
+    pub fn regularized(&self) -> bool {
+        self.rung == Rung::Regularized
+    }
 }
 
 /// `w_i = (M z + q)_i`.

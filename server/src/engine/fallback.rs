@@ -1,0 +1,273 @@
+//! The solve stage's ladder of formulations for Lemke: a step goes on
+//! where the rigid LCP has no solution, and says so.
+//!
+//! 1. The rigid LCP of formulation.md, by Lemke's own ladder of pivot
+//!    tolerances, refinement and regularisation (`solver::lemke`).
+//! 2. [`Fallback::Relaxed`]: the same matrix with the offsets that ask for
+//!    motion left out of `q` ([`Offsets::Relaxed`]: no joint drift term,
+//!    normal offsets clipped at zero). Always solvable in exact arithmetic,
+//!    never adds energy (the derivation is at [`Offsets`]).
+//! 3. [`Fallback::Compliant`]: the relaxed problem on `M + eps I`, `eps`
+//!    the least of [`COMPLIANCE`] (relative to `max |M_ij|`) for which
+//!    Lemke's answer verifies against that regularised problem. `M + eps I`
+//!    is strictly copositive, so a solution exists for every `q`; `eps` is
+//!    a compliance of every row (m/s per N s), reported.
+//!
+//! A rigid answer is also refused, and the step relaxed, when it gives more
+//! kinetic energy than the free motion plus what the stabilisation may give
+//! ([`Mlcp::stabilisation_budget`], with a factor [`BUDGET_FACTOR`]): the
+//! solvable neighbours of an unsolvable LCP have huge impulses, and their
+//! answers inject energy through the offsets (see there).
+//!
+//! Each rung's answer is verified against the problem it claims to solve.
+//! The step report carries the rung, so a run counts how often each was
+//! needed.
+
+use super::contact::Contact;
+use super::mlcp::{Mlcp, Offsets};
+use super::model::Params;
+use super::solver::{Lcp, Lemke, LemkeError, SolveInfo};
+
+/// The compliances tried by [`Fallback::Compliant`], relative to the LCP
+/// matrix's largest entry, least first (Drake's regularised Lemke climbs a
+/// schedule the same way, verifying every candidate).
+pub const COMPLIANCE: [f64; 5] = [1e-8, 1e-6, 1e-4, 1e-2, 1.0];
+
+/// How much of [`Mlcp::stabilisation_budget`] a rigid answer may use
+/// before it is refused: the budget counts each row alone, and rows that
+/// share a body need a little more (two contacts of one sphere).
+pub const BUDGET_FACTOR: f64 = 2.0;
+
+/// Kinetic energy gains below this (J, plus `ENERGY_RELATIVE` of the free
+/// motion's energy) are round-off of the energy sum.
+const ENERGY_ABSOLUTE: f64 = 1e-12;
+const ENERGY_RELATIVE: f64 = 1e-9;
+
+/// The formulation a step fell back to where the rigid LCP failed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Fallback {
+    /// Solved with [`Offsets::Relaxed`]: no separation asked of any row.
+    Relaxed,
+    /// Solved with [`Offsets::Relaxed`] on `M + eps I`; `eps` absolute (the
+    /// LCP's units: m/s per N s).
+    Compliant { eps: f64 },
+}
+
+impl Fallback {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Fallback::Relaxed => "relaxed",
+            Fallback::Compliant { .. } => "compliant",
+        }
+    }
+
+    /// The stronger of two (a step's solves may fall back differently).
+    pub fn max(a: Option<Fallback>, b: Option<Fallback>) -> Option<Fallback> {
+        match (a, b) {
+            (Some(Fallback::Compliant { eps: x }), Some(Fallback::Compliant { eps: y })) => {
+                Some(Fallback::Compliant { eps: x.max(y) })
+            }
+            (Some(c @ Fallback::Compliant { .. }), _)
+            | (_, Some(c @ Fallback::Compliant { .. })) => Some(c),
+            (Some(Fallback::Relaxed), _) | (_, Some(Fallback::Relaxed)) => Some(Fallback::Relaxed),
+            (None, None) => None,
+        }
+    }
+}
+
+/// The diagonal of the LCP matrix, kept while a compliance is added to it,
+/// and the rigid answer while the energy check forms the relaxed one.
+#[derive(Debug, Default)]
+pub struct Scratch {
+    diagonal: Vec<f64>,
+    /// The rigid answer and its offsets while the relaxed one is formed.
+    z: Vec<f64>,
+    offset: Vec<f64>,
+}
+
+/// The step's data that the right-hand side is formed from.
+#[derive(Clone, Copy)]
+pub struct Step<'a> {
+    pub nu_free: &'a [f64],
+    pub contacts: &'a [Contact],
+    pub params: &'a Params,
+}
+
+/// What the ladder gave.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Solved {
+    pub info: SolveInfo,
+    pub fallback: Option<Fallback>,
+    /// A rigid answer was found but refused by the energy check.
+    pub energy_refused: bool,
+    /// The kinetic energy over the free motion's that the answer was
+    /// allowed (J): the energy check's bound for a rigid answer, zero for a
+    /// fallback (which never adds energy).
+    pub allowance: f64,
+}
+
+/// The rigid answer's energy check. A rigid answer, recovered into `nu`,
+/// passes outright when it gives no more kinetic energy than the free
+/// motion plus [`BUDGET_FACTOR`] times the stabilisation budget (most
+/// steps: a resting or sliding contact, a bounce). Otherwise it is held
+/// against the relaxed answer of the same step: it may gain what the
+/// relaxed answer gains, plus the work its offsets would do at the relaxed
+/// impulses (`Mlcp::offset_work`), times `BUDGET_FACTOR`, plus the budget.
+/// A jointed chain that swings holds its joints with impulses of the
+/// relaxed answer's size and passes; a chain locked against a contact
+/// (joint_torques, step 2069: 1.7e5 N s) needs impulses 1e4 times those
+/// of the relaxed answer and fails.
+fn cheap_allowance(m: &Mlcp, nu_free: &[f64]) -> f64 {
+    let free: f64 = 0.5 * nu_free.iter().map(|v| v * v).sum::<f64>();
+    BUDGET_FACTOR * m.stabilisation_budget() + ENERGY_ABSOLUTE + ENERGY_RELATIVE * free
+}
+
+/// Solves the step's LCP (right-hand side already formed with
+/// [`Offsets::Full`], or `guessed` already solved from the last support)
+/// into `m.z` and recovers `nu'` into `nu`, climbing the ladder of the
+/// module notes. On a fallback, `m`'s right-hand side is left as the
+/// answer's. The error is the rigid problem's, returned only when every
+/// rung failed; then `m` holds the rigid problem again.
+pub fn solve(
+    lemke: &mut Lemke,
+    m: &mut Mlcp,
+    guessed: Option<SolveInfo>,
+    step: Step,
+    nu: &mut Vec<f64>,
+    scratch: &mut Scratch,
+) -> Result<Solved, LemkeError> {
+    let Step {
+        nu_free,
+        contacts,
+        params: p,
+    } = step;
+    let n = m.lcp_size();
+    let rigid = match guessed {
+        Some(info) => Ok(info),
+        None => {
+            let lcp = Lcp {
+                n,
+                m: &m.lcp_m,
+                q: &m.lcp_q,
+            };
+            lemke.solve(&lcp, &mut m.z)
+        }
+    };
+    let mut energy_refused = false;
+    if !p.fallback {
+        // Rigid only: the answer as it is, or the failure.
+        let info = rigid?;
+        m.recover(nu_free, nu);
+        return Ok(Solved {
+            info,
+            fallback: None,
+            energy_refused,
+            allowance: f64::INFINITY,
+        });
+    }
+    let rigid = match rigid {
+        Ok(info) => {
+            m.recover(nu_free, nu);
+            let gain = m.kinetic_change(nu_free, nu);
+            let allowance = cheap_allowance(m, nu_free);
+            if gain <= allowance {
+                return Ok(Solved {
+                    info,
+                    fallback: None,
+                    energy_refused,
+                    allowance,
+                });
+            }
+            // Held against the relaxed answer: the rigid one is kept aside.
+            scratch.z.clear();
+            scratch.z.extend_from_slice(&m.z);
+            scratch.offset.clear();
+            scratch.offset.extend_from_slice(&m.offset);
+            m.rhs(nu_free, contacts, p, Offsets::Relaxed);
+            let lcp = Lcp {
+                n,
+                m: &m.lcp_m,
+                q: &m.lcp_q,
+            };
+            if let Ok(relaxed) = lemke.solve(&lcp, &mut m.z) {
+                m.recover(nu_free, nu);
+                let relaxed_gain = m.kinetic_change(nu_free, nu);
+                let work = m.offset_work(&scratch.offset);
+                let bound = relaxed_gain + BUDGET_FACTOR * work + allowance;
+                if gain <= bound {
+                    // The rigid answer stands: the same operations on the
+                    // same data as before give the same bits.
+                    m.rhs(nu_free, contacts, p, Offsets::Full);
+                    m.z.clear();
+                    m.z.extend_from_slice(&scratch.z);
+                    m.recover(nu_free, nu);
+                    return Ok(Solved {
+                        info,
+                        fallback: None,
+                        energy_refused,
+                        allowance: bound,
+                    });
+                }
+                return Ok(Solved {
+                    info: relaxed,
+                    fallback: Some(Fallback::Relaxed),
+                    energy_refused: true,
+                    allowance: 0.0,
+                });
+            }
+            energy_refused = true;
+            LemkeError::NumericalBreakdown {
+                pivots: info.work,
+                residual: info.residual,
+            }
+        }
+        Err(e) => e,
+    };
+    m.rhs(nu_free, contacts, p, Offsets::Relaxed);
+    {
+        let lcp = Lcp {
+            n,
+            m: &m.lcp_m,
+            q: &m.lcp_q,
+        };
+        if let Ok(info) = lemke.solve(&lcp, &mut m.z) {
+            m.recover(nu_free, nu);
+            return Ok(Solved {
+                info,
+                fallback: Some(Fallback::Relaxed),
+                energy_refused,
+                allowance: 0.0,
+            });
+        }
+    }
+    let scale = m.lcp_m.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    scratch.diagonal.clear();
+    scratch.diagonal.extend((0..n).map(|i| m.lcp_m[i * n + i]));
+    for rel in COMPLIANCE {
+        let eps = rel * scale;
+        for i in 0..n {
+            m.lcp_m[i * n + i] = scratch.diagonal[i] + eps;
+        }
+        let lcp = Lcp {
+            n,
+            m: &m.lcp_m,
+            q: &m.lcp_q,
+        };
+        let solved = lemke.solve(&lcp, &mut m.z);
+        for i in 0..n {
+            m.lcp_m[i * n + i] = scratch.diagonal[i];
+        }
+        if let Ok(info) = solved {
+            m.recover(nu_free, nu);
+            return Ok(Solved {
+                info,
+                fallback: Some(Fallback::Compliant { eps }),
+                energy_refused,
+                allowance: 0.0,
+            });
+        }
+    }
+    // The caller may go on with another solver: give it the rigid problem.
+    m.rhs(nu_free, contacts, p, Offsets::Full);
+    Err(rigid)
+}

@@ -1,0 +1,155 @@
+//! Issue 13: every step succeeds. Every shipped scene at ten times its
+//! duration with each solver, the reference scene for 10^6 steps with
+//! Lemke alone, joint_torques for 30 s, and 500 seeded random scenes of
+//! 20 steps: no failed step, no PGS fallback where Lemke was asked for, and
+//! the energy and speed bounds of `bench::robust::check`.
+
+use cosim_server::bench::robust;
+use cosim_server::engine::{Engine, LadderCounts, Model};
+use cosim_shared::{Scene, SolverChoice};
+use cosim_tests::shipped_scene;
+
+const SHIPPED: [&str; 6] = [
+    "reference.toml",
+    "friction.toml",
+    "frictionless.toml",
+    "joint_torques.toml",
+    "joints.toml",
+    "restitution.toml",
+];
+
+/// Steps `steps` times; panics on a failed step or, with Lemke asked for,
+/// a step solved by anything else. Returns the ladder's counts.
+fn run_all(text: &str, name: &str, solver: SolverChoice, steps: u64) -> LadderCounts {
+    let scene = Scene::parse(text, name).unwrap_or_else(|e| panic!("{e}"));
+    let mut model = Model::from_scene(&scene);
+    model.params.solver = solver;
+    let mut engine = Engine::new(model);
+    let mut ladder = LadderCounts::default();
+    for _ in 0..steps {
+        let r = engine.step();
+        if let Some(e) = r.error {
+            panic!(
+                "{name} with {}: step {} failed: {e}",
+                solver.as_str(),
+                r.step + 1
+            );
+        }
+        if solver == SolverChoice::Lemke {
+            assert_eq!(
+                r.solver, "lemke",
+                "{name}: step {} not solved by Lemke",
+                r.step
+            );
+        }
+        ladder.add(&r);
+    }
+    ladder
+}
+
+#[test]
+fn every_shipped_scene_runs_ten_times_its_duration_with_each_solver() {
+    for name in SHIPPED {
+        let text = shipped_scene(name);
+        let scene = Scene::parse(&text, name).unwrap_or_else(|e| panic!("{e}"));
+        let steps = 10 * scene.step_count();
+        for solver in [SolverChoice::Lemke, SolverChoice::Pgs, SolverChoice::Auto] {
+            let ladder = run_all(&text, name, solver, steps);
+            eprintln!(
+                "{name} x10 ({steps} steps), {}: {}",
+                solver.as_str(),
+                cosim_server::output::ladder_line(&ladder)
+            );
+        }
+    }
+}
+
+/// 10^6 steps (1000 s) of the reference scene with Lemke alone: the float
+/// Lemke once ended on a ray at step 154,952; the ladder's tighter pivot
+/// tolerance solves that step, and no step falls back.
+#[test]
+fn the_reference_scene_runs_a_million_steps_with_lemke_alone() {
+    let ladder = run_all(
+        &shipped_scene("reference.toml"),
+        "reference.toml",
+        SolverChoice::Lemke,
+        1_000_000,
+    );
+    eprintln!(
+        "reference, 10^6 steps: {}",
+        cosim_server::output::ladder_line(&ladder)
+    );
+    assert_eq!(ladder.fell_back(), 0, "{ladder:?}");
+    assert!(
+        ladder.rungs[2] > 0,
+        "the tighter rung was never needed: {ladder:?}"
+    );
+}
+
+/// joint_torques for 30 s (it stopped at step 2069 on a ray): no failure,
+/// and its energy bounded by what the shoulder torque's work explains
+/// (`robust::check`'s kinetic, midpoint-energy and speed bounds, which
+/// count the torque's work on the free motion).
+#[test]
+fn joint_torques_runs_30_s_within_the_shoulder_torques_work() {
+    let text = shipped_scene("joint_torques.toml");
+    let c = robust::check(&text, 30_000, SolverChoice::Lemke).unwrap_or_else(|e| panic!("{e}"));
+    eprintln!("joint_torques 30 s: {c:?}");
+    assert_eq!((c.steps, c.failures), (30_000, 0), "{:?}", c.first_failure);
+    assert!(
+        c.kinetic <= 0.0,
+        "a step gained {} J over its bound",
+        c.kinetic
+    );
+    assert!(
+        c.energy <= 0.0,
+        "midpoint energy {} J over its bound",
+        c.energy
+    );
+    assert!(
+        c.speed <= 0.0,
+        "a body {} m/s faster than its bound",
+        c.speed
+    );
+    // The steps where the chain locks against a plane fell back, and say so.
+    assert!(c.ladder.fell_back() > 0);
+}
+
+/// 500 seeded random scenes of 20 steps (`bench robust` runs more): no
+/// failed step, every bound held.
+#[test]
+fn five_hundred_random_scenes_have_no_failed_step_and_keep_their_energy() {
+    let s = robust::run(500, 20, 1, SolverChoice::Lemke).unwrap_or_else(|e| panic!("{e}"));
+    eprintln!("{}", robust::table(&s, 20, 1, SolverChoice::Lemke));
+    assert_eq!(s.steps, 500 * 20);
+    assert_eq!(s.failures, 0, "{:?}", s.first_failure);
+    assert!(s.worst_kinetic.0 <= 0.0, "{:?}", s.worst_kinetic);
+    assert!(s.worst_energy.0 <= 0.0, "{:?}", s.worst_energy);
+    assert!(s.worst_speed.0 <= 0.0, "{:?}", s.worst_speed);
+}
+
+/// The generator is what it says: deterministic in its seed, and it makes
+/// the hard cases (corners of several planes, joints, overlaps, exactly
+/// touching spheres) often enough to matter.
+#[test]
+fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
+    assert_eq!(robust::scene(7), robust::scene(7));
+    assert_ne!(robust::scene(7), robust::scene(8));
+    let (mut corners, mut joints, mut overlapping) = (0, 0, 0);
+    for seed in 1..=200 {
+        let text = robust::scene(seed);
+        let scene = Scene::parse(&text, "<robust>").unwrap_or_else(|e| panic!("{e}\n{text}"));
+        let model = Model::from_scene(&scene);
+        corners += usize::from(model.planes.len() >= 2);
+        joints += usize::from(!model.joints.is_empty());
+        let engine = Engine::new(model.clone());
+        let mut geoms = Vec::new();
+        let deep =
+            cosim_server::engine::measure::max_penetration(&model, engine.state(), &mut geoms);
+        overlapping += usize::from(deep > 1e-4);
+    }
+    assert!(
+        corners >= 100 && joints >= 60 && overlapping >= 40,
+        "{corners} {joints} {overlapping}"
+    );
+}
