@@ -39,7 +39,7 @@ struct ServerProc {
 
 impl ServerProc {
     fn start(name: &str, out: &Path, extra: &[&str]) -> ServerProc {
-        let s = ServerProc::spawn(name, out, extra);
+        let mut s = ServerProc::spawn(name, out, extra);
         s.wait_ready();
         s
     }
@@ -61,8 +61,9 @@ impl ServerProc {
         }
     }
 
-    /// Polls the control service until it answers (the server is up).
-    fn wait_ready(&self) {
+    /// Polls the control service until it answers (the server is up);
+    /// a server that exits first fails the test with its stderr.
+    fn wait_ready(&mut self) {
         let start = Instant::now();
         loop {
             if Connection::connect(&self.name)
@@ -70,6 +71,19 @@ impl ServerProc {
                 .is_ok()
             {
                 return;
+            }
+            if let Some(child) = self.child.as_mut() {
+                if let Ok(Some(status)) = child.try_wait() {
+                    let mut stderr = String::new();
+                    if let Some(mut e) = child.stderr.take() {
+                        use std::io::Read;
+                        let _ = e.read_to_string(&mut stderr);
+                    }
+                    panic!(
+                        "server '{}' exited ({status}) before it came up: {stderr}",
+                        self.name
+                    );
+                }
             }
             assert!(
                 start.elapsed() < Duration::from_secs(20),
@@ -959,7 +973,7 @@ fn on_failure_abort_stops_at_the_first_failed_step() {
 /// once more. Counted once per attempt, logged once per attempt.
 #[test]
 fn on_failure_pause_tries_a_failed_step_once_and_waits() {
-    let (server, dir, _scene, name) = serve_locked("fail-pause", "pause", &["--steps", "50"]);
+    let (mut server, dir, _scene, name) = serve_locked("fail-pause", "pause", &["--steps", "50"]);
     server.wait_ready();
     let c = Connection::connect(&name).expect("connect");
     let start = Instant::now();

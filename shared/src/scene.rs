@@ -33,6 +33,35 @@ pub struct Scene {
     /// The animation's camera; framed automatically when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub camera: Option<CameraDesc>,
+    /// Contact and joint compliance; rigid (the default) where absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compliance: Option<ComplianceDesc>,
+}
+
+/// `[compliance]`: springs and dampers in physical units where a user
+/// wants soft contact or soft joints, as ODE's CFM/ERP, MuJoCo's
+/// solref/solimp and Drake's point-contact stiffness and dissipation give
+/// them. Off by default: exact rigid contact is the engine's formulation.
+/// `[compliance.contact]` acts on every contact's normal row while it
+/// penetrates, `[compliance.joint]` on every joint row.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct ComplianceDesc {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<SpringDesc>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint: Option<SpringDesc>,
+}
+
+/// A spring and a damper along a constraint row.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SpringDesc {
+    /// N/m: the force per metre of penetration (contact) or joint error.
+    pub stiffness: f64,
+    /// N s/m: the force per m/s of the row's speed.
+    #[serde(default)]
+    pub damping: f64,
 }
 
 /// `[camera]`: overrides the animation's automatic framing.
@@ -454,6 +483,15 @@ impl Scene {
             }
             finite3(&j.anchor).map_err(|m| err(f("anchor"), m))?;
             finite3(&j.torque).map_err(|m| err(f("torque"), m))?;
+        }
+        if let Some(c) = &self.compliance {
+            for (what, spring) in [("contact", c.contact), ("joint", c.joint)] {
+                if let Some(k) = spring {
+                    positive(k.stiffness)
+                        .map_err(|m| err(format!("compliance.{what}.stiffness"), m))?;
+                    nonneg(k.damping).map_err(|m| err(format!("compliance.{what}.damping"), m))?;
+                }
+            }
         }
         if let Some(c) = &self.camera {
             if let Some(d) = &c.direction {

@@ -153,3 +153,16 @@ fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
         "{corners} {joints} {overlapping}"
     );
 }
+
+/// The same bounds with the iterative solver (200 scenes: PGS is slower on
+/// the locked ones, which run to its iteration cap before the relaxed
+/// retry; `engine::iterative`).
+#[test]
+fn two_hundred_random_scenes_with_pgs_keep_their_energy() {
+    let s = robust::run(200, 20, 1, SolverChoice::Pgs).unwrap_or_else(|e| panic!("{e}"));
+    eprintln!("{}", robust::table(&s, 20, 1, SolverChoice::Pgs));
+    assert_eq!(s.failures, 0, "{:?}", s.first_failure);
+    assert!(s.worst_kinetic.0 <= 0.0, "{:?}", s.worst_kinetic);
+    assert!(s.worst_energy.0 <= 0.0, "{:?}", s.worst_energy);
+    assert!(s.worst_speed.0 <= 0.0, "{:?}", s.worst_speed);
+}

@@ -109,6 +109,10 @@ pub enum BenchWhat {
         seed: u64,
         #[arg(long, default_value = "lemke")]
         solver: cosim_shared::SolverChoice,
+        /// Print the scene of seed `--seed` as a scene file and stop (to
+        /// run it with `cosim-server run FILE`).
+        #[arg(long)]
+        print_scene: bool,
         /// Also write the table to this file.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -274,11 +278,23 @@ pub fn main() -> ExitCode {
         Command::Bench {
             what:
                 BenchWhat::Robust {
+                    seed,
+                    print_scene: true,
+                    ..
+                },
+        } => {
+            print!("{}", crate::bench::robust::scene(seed));
+            ExitCode::SUCCESS
+        }
+        Command::Bench {
+            what:
+                BenchWhat::Robust {
                     scenes,
                     steps,
                     seed,
                     solver,
                     out,
+                    ..
                 },
         } => {
             use crate::bench::robust;

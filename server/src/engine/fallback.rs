@@ -23,6 +23,7 @@
 //! The step report carries the rung, so a run counts how often each was
 //! needed.
 
+use super::applied::InvMass;
 use super::contact::Contact;
 use super::mlcp::{Mlcp, Offsets};
 use super::model::Params;
@@ -91,6 +92,7 @@ pub struct Step<'a> {
     pub nu_free: &'a [f64],
     pub contacts: &'a [Contact],
     pub params: &'a Params,
+    pub minv: &'a [InvMass],
 }
 
 /// What the ladder gave.
@@ -117,9 +119,9 @@ pub struct Solved {
 /// relaxed answer's size and passes; a chain locked against a contact
 /// (joint_torques, step 2069: 1.7e5 N s) needs impulses 1e4 times those
 /// of the relaxed answer and fails.
-fn cheap_allowance(m: &Mlcp, nu_free: &[f64]) -> f64 {
+pub fn cheap_allowance(m: &Mlcp, nu_free: &[f64], p: &Params, minv: &[InvMass]) -> f64 {
     let free: f64 = 0.5 * nu_free.iter().map(|v| v * v).sum::<f64>();
-    BUDGET_FACTOR * m.stabilisation_budget() + ENERGY_ABSOLUTE + ENERGY_RELATIVE * free
+    BUDGET_FACTOR * m.stabilisation_budget(p, minv) + ENERGY_ABSOLUTE + ENERGY_RELATIVE * free
 }
 
 /// Solves the step's LCP (right-hand side already formed with
@@ -140,6 +142,7 @@ pub fn solve(
         nu_free,
         contacts,
         params: p,
+        minv,
     } = step;
     let n = m.lcp_size();
     let rigid = match guessed {
@@ -169,7 +172,7 @@ pub fn solve(
         Ok(info) => {
             m.recover(nu_free, nu);
             let gain = m.kinetic_change(nu_free, nu);
-            let allowance = cheap_allowance(m, nu_free);
+            let allowance = cheap_allowance(m, nu_free, p, minv);
             if gain <= allowance {
                 return Ok(Solved {
                     info,

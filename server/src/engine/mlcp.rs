@@ -182,7 +182,9 @@ pub fn normal_offset(c: &Contact, v_n_free: f64, p: &Params) -> f64 {
     let gap_term = if psi >= 0.0 {
         psi / p.h
     } else {
-        p.beta * psi / p.h
+        // A compliant contact's spring sets the fraction (model.rs,
+        // `Compliance`); a rigid one uses the stabilisation factor.
+        p.contact_compliance.map_or(p.beta, |k| k.erp(p.h)) * psi / p.h
     };
     let closes = psi + p.h * v_n_free < 0.0;
     if c.e > 0.0 && c.v_n < -p.restitution_threshold && closes {
@@ -262,6 +264,10 @@ pub struct Mlcp {
     /// (`beta psi_b / h` on joint rows, `a_n` on normal rows, 0 on friction
     /// rows). The iterative solver works with it.
     pub offset: Vec<f64>,
+    /// Each row's constraint-force mixing (`Compliance::cfm`; 0 when
+    /// rigid), added to its Delassus diagonal: joint and normal rows, then
+    /// friction rows (always 0).
+    pub cfm: Vec<f64>,
     /// Delassus matrix of the basis rows, row-major.
     w: Vec<f64>,
     /// `A_bb`, then its Cholesky factor (lower triangle), column-major.
@@ -399,9 +405,10 @@ impl Mlcp {
             let (pa, ra) = anchor(joint.a, &joint.local_a, state);
             let (pb, rb) = anchor(joint.b, &joint.local_b, state);
             let psi = pa - pb;
+            let factor = p.joint_compliance.map_or(p.beta, |k| k.erp(p.h));
             for k in 0..3 {
                 let row = Row::along(Vector3::ith(k, 1.0), ra, rb);
-                self.offset.push(p.beta * psi[k] / p.h);
+                self.offset.push(factor * psi[k] / p.h);
                 self.rows.push(row);
             }
         }
@@ -414,6 +421,13 @@ impl Mlcp {
             self.lcp_contacts.push(ci);
         }
         self.nc = self.lcp_contacts.len();
+        // Each row's compliance (model.rs, `Compliance`): joint rows, then
+        // normal rows; friction rows stay rigid.
+        self.cfm.clear();
+        let joint_cfm = p.joint_compliance.map_or(0.0, |k| k.cfm(p.h));
+        let contact_cfm = p.contact_compliance.map_or(0.0, |k| k.cfm(p.h));
+        self.cfm.resize(self.nb, joint_cfm);
+        self.cfm.resize(self.nb + self.nc, contact_cfm);
         self.basis.extend_from_slice(&self.rows);
         for i in 0..self.nc {
             let c = &contacts[self.lcp_contacts[i]];
@@ -538,7 +552,7 @@ impl Mlcp {
             for j in 0..nb {
                 for i in 0..nb {
                     self.chol
-                        .push(self.w[i * r + j] + if i == j { shift } else { 0.0 });
+                        .push(self.w[i * r + j] + if i == j { shift + self.cfm[i] } else { 0.0 });
                 }
             }
             let factored = if nb <= SMALL_BLOCK {
@@ -655,6 +669,10 @@ impl Mlcp {
                 *out = ci1 * a + ci2 * b;
             }
         }
+        // Compliant normal rows (model.rs, `Compliance`).
+        for i in 0..self.nc {
+            self.lcp_m[i * n + i] += self.cfm[self.nb + i];
+        }
         // E and its transpose, U: friction rows of contact f sit at
         // nc + f nd ..; its slack s_f at m + f.
         for (f, (&i, &mu)) in self.friction_of.iter().zip(&self.mu).enumerate() {
@@ -734,7 +752,9 @@ impl Mlcp {
     /// offset asks for a separation speed `v` (a joint's drift term, a
     /// penetrating or bouncing contact's negative `a_n`) gets `v^2 / 2`
     /// over its own Delassus diagonal (its effective inverse mass), the
-    /// energy of that row alone moving at `v`.
+    /// energy of that row alone moving at `v` (the diagonal of its own
+    /// row, the same for both solvers); a compliant row also the energy its
+    /// spring holds, `k psi^2 / 2` with `psi = v h / ERP`.
     ///
     /// Why the diagonal: the least energy that meets every row's speed at
     /// once is `1/2 v^T W^-1 v`, unbounded as the rows become dependent. A
@@ -742,32 +762,35 @@ impl Mlcp {
     /// step 2069: impulses of 1.7e5 N s, 0.49 J gained in one step without
     /// input): there the rigid answer is the stabilisation's artefact, not
     /// physics, and `engine::fallback` refuses it.
-    pub fn stabilisation_budget(&self) -> f64 {
-        let (nb, r) = (self.nb, self.basis.len());
-        let n = self.lcp_size();
-        let joints: f64 = (0..nb)
-            .map(|k| {
-                let v = self.offset[k];
-                let d = self.w[k * r + k];
-                if d > 0.0 {
-                    0.5 * v * v / d
-                } else {
-                    0.0
-                }
-            })
-            .sum();
-        let contacts: f64 = (0..self.nc)
-            .map(|i| {
-                let v = self.offset[nb + i].min(0.0);
-                let d = self.lcp_m.get(i * n + i).copied().unwrap_or(0.0);
-                if v < 0.0 && d > 0.0 {
-                    0.5 * v * v / d
-                } else {
-                    0.0
-                }
-            })
+    pub fn stabilisation_budget(&self, p: &Params, minv: &[InvMass]) -> f64 {
+        let nb = self.nb;
+        let row = |k: usize, spring: Option<super::model::Compliance>| {
+            let v = self.offset[k];
+            let d = self.rows[k].coupling(&self.rows[k], minv) + self.cfm[k];
+            let kinetic = if d > 0.0 { 0.5 * v * v / d } else { 0.0 };
+            let stored = spring.map_or(0.0, |k| {
+                let psi = v * p.h / k.erp(p.h);
+                0.5 * k.stiffness * psi * psi
+            });
+            kinetic + stored
+        };
+        let joints: f64 = (0..nb).map(|k| row(k, p.joint_compliance)).sum();
+        let contacts: f64 = (nb..nb + self.nc)
+            .filter(|&k| self.offset[k] < 0.0)
+            .map(|k| row(k, p.contact_compliance))
             .sum();
         joints + contacts
+    }
+
+    /// [`Mlcp::kinetic_change`] from the iterative solver's impulses
+    /// `lambda` on [`Mlcp::rows`] (joint, normal and friction rows).
+    pub fn kinetic_change_rows(&self, lambda: &[f64], nu_free: &[f64], nu: &[f64]) -> f64 {
+        self.rows
+            .iter()
+            .zip(lambda)
+            .filter(|(_, &l)| l != 0.0)
+            .map(|(row, &l)| 0.5 * l * (row.velocity(nu) + row.velocity(nu_free)))
+            .sum()
     }
 
     /// The work the separation-asking offsets `offset` (a copy of
@@ -850,10 +873,12 @@ impl Mlcp {
             if t != usize::MAX {
                 self.lcp_contacts[t] = self.lcp_contacts[i];
                 self.rows[nb + t] = self.rows[nb + i];
+                self.cfm[nb + t] = self.cfm[nb + i];
             }
         }
         self.lcp_contacts.truncate(new_nc);
         self.rows.truncate(nb + new_nc);
+        self.cfm.truncate(nb + new_nc);
         let mut g = 0;
         for f in 0..self.friction_of.len() {
             let t = self.new_index[self.friction_of[f]];
@@ -889,6 +914,7 @@ impl Mlcp {
             }
         }
         self.offset.resize(self.rows.len(), 0.0);
+        self.cfm.resize(self.rows.len(), 0.0);
     }
 }
 

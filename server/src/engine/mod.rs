@@ -16,6 +16,7 @@ pub mod collision;
 pub mod contact;
 pub mod fallback;
 pub mod integrate;
+pub mod iterative;
 pub mod measure;
 pub mod mlcp;
 pub mod model;
@@ -39,7 +40,7 @@ use cosim_shared::SolverChoice;
 use mlcp::Offsets;
 use mlcp::{Assembly, Mlcp};
 use nalgebra::Vector3;
-use solver::{Lcp, Lemke, LemkeError, Pgs, PgsParams, PgsProblem, Rung};
+use solver::{Lcp, Lemke, LemkeError, Pgs, PgsParams, Rung};
 
 /// With `solver = "auto"`, LCPs larger than this go to PGS alone. Measured
 /// on piles of spheres in a box (h = 5e-3, n_d = 8, 200 steps, this
@@ -140,6 +141,7 @@ struct Workspace {
     guess: Vec<bool>,
     slacks: Vec<(usize, usize, usize)>,
     fallback: fallback::Scratch,
+    iterative: iterative::Scratch,
 }
 
 impl Workspace {
@@ -453,6 +455,8 @@ impl Engine {
         ws.select(model, &self.state, &self.inputs);
         let p = &model.params;
         let mut canonical = false;
+        // The last solve's answer is of a fallback formulation.
+        let mut relaxed = false;
         loop {
             {
                 let _span = tracing::trace_span!("assemble").entered();
@@ -521,12 +525,14 @@ impl Engine {
                             nu_free: &ws.nu_free,
                             contacts: &ws.contacts,
                             params: p,
+                            minv: &ws.minv,
                         },
                         &mut ws.nu,
                         &mut ws.fallback,
                     );
                     match solved {
                         Ok(s) => {
+                            relaxed = s.fallback.is_some();
                             let info = s.info;
                             report.pivots += info.work;
                             report.regularized += usize::from(info.regularized());
@@ -551,68 +557,34 @@ impl Engine {
                     }
                 }
                 if use_pgs {
-                    {
-                        // Warm start: joint impulses and normal impulses by
-                        // contact identity from the last step.
-                        m.add_friction_rows(&ws.contacts);
-                        m.lambda.clear();
-                        m.lambda.resize(m.rows.len(), 0.0);
-                        if p.skips.warm_start {
-                            m.lambda[..m.nb].copy_from_slice(&self.state.warm_joint);
-                            for (i, &ci) in m.lcp_contacts.iter().enumerate() {
-                                m.lambda[m.nb + i] = self.state.warm_normal[ws.contacts[ci].id];
-                            }
-                            // Friction: last step's world impulse on this
-                            // step's tangent plane, inside this step's cone.
-                            for (f, &i) in m.friction_of.iter().enumerate() {
-                                let c = &ws.contacts[m.lcp_contacts[i]];
-                                let w = self.state.warm_friction[c.id];
-                                let base = m.nb + m.nc + f * m.nd;
-                                solver::pgs::warm_friction(
-                                    [w.dot(&c.t1), w.dot(&c.t2)],
-                                    m.mu[f] * m.lambda[m.nb + i],
-                                    p.friction_cone == cosim_shared::FrictionCone::Circular,
-                                    &mut m.lambda[base..base + m.nd],
-                                );
-                            }
-                        }
-                        let problem = PgsProblem {
-                            rows: &m.rows,
-                            offset: &m.offset,
-                            nb: m.nb,
-                            nc: m.nc,
-                            nd: m.nd,
-                            friction_of: &m.friction_of,
-                            mu: &m.mu,
-                            minv: &ws.minv,
+                    let solved = iterative::solve(
+                        &mut self.pgs,
+                        &self.pgs_params,
+                        m,
+                        &self.state,
+                        fallback::Step {
                             nu_free: &ws.nu_free,
-                            lcp: Lcp {
-                                n,
-                                m: &m.lcp_m,
-                                q: &m.lcp_q,
-                            },
-                            circular: p.friction_cone == cosim_shared::FrictionCone::Circular,
-                        };
-                        let info = self.pgs.solve(
-                            &problem,
-                            &self.pgs_params,
-                            &mut m.lambda,
-                            &mut ws.nu,
-                            &mut m.z,
-                        );
-                        report.pivots += info.iterations;
-                        report.residual = report.residual.max(info.residual);
-                        report.not_converged |= !info.converged;
-                        m.p_b.clear();
-                        m.p_b.extend_from_slice(&m.lambda[..m.nb]);
-                    }
+                            contacts: &ws.contacts,
+                            params: p,
+                            minv: &ws.minv,
+                        },
+                        &mut ws.nu,
+                        &mut ws.iterative,
+                    );
+                    report.pivots += solved.info.iterations;
+                    report.residual = report.residual.max(solved.info.residual);
+                    report.not_converged |= !solved.info.converged;
+                    report.fallback = Fallback::max(report.fallback, solved.fallback);
+                    report.energy_refused |= solved.energy_refused;
+                    report.energy_allowance = solved.allowance;
+                    relaxed = solved.fallback.is_some();
                 }
             }
             timings.solve += lap.lap();
             if !ws.nu.iter().all(|x| x.is_finite()) {
                 return Err(StepError::NonFinite);
             }
-            let added = prune::check_left_out(&mut ws.contacts, &ws.nu, p.h);
+            let added = prune::check_left_out(&mut ws.contacts, &ws.nu, p.h, relaxed);
             if added > 0 {
                 report.resolves += 1;
                 continue;

@@ -96,7 +96,54 @@ pub struct Params {
     /// and refuse rigid answers that add energy. Off: such a step fails
     /// and the state stays (`serve --on-failure pause|abort`).
     pub fallback: bool,
+    /// Springs and dampers on the contact normal rows and on the joint
+    /// rows (the scene's `[compliance]`); `None`: rigid.
+    pub contact_compliance: Option<Compliance>,
+    pub joint_compliance: Option<Compliance>,
     pub position_update: cosim_shared::PositionUpdate,
+}
+
+/// A spring of stiffness `k` (N/m) and a damper `c` (N s/m) along a
+/// constraint row, in the step's terms.
+///
+/// Derivation. Along a row with violation `psi` (a contact's gap, negative
+/// when it penetrates; a joint's error) and end-of-step speed
+/// `v' = G^T nu'`, the implicit spring-damper gives the step's impulse
+/// `p = -h (k (psi + h v') + c v')`. Solved for `v'`:
+///
+/// ```text
+/// v' + ERP psi / h + CFM p = 0,   ERP = h k / (h k + c),
+///                                 CFM = 1 / (h (h k + c))
+/// ```
+///
+/// ODE's ERP and CFM, in physical units. So compliance is the rigid row
+/// with its stabilisation factor `beta` replaced by `ERP` and `CFM` added
+/// to its Delassus diagonal; for a contact the row stays complementary
+/// (`>= 0 _|_ p >= 0`). As `k` grows with `c / k` fixed, `ERP -> 1` and
+/// `CFM -> 0`: the rigid row with `beta = 1` (tested).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Compliance {
+    pub stiffness: f64,
+    pub damping: f64,
+}
+
+impl Compliance {
+    pub fn erp(&self, h: f64) -> f64 {
+        h * self.stiffness / (h * self.stiffness + self.damping)
+    }
+
+    pub fn cfm(&self, h: f64) -> f64 {
+        1.0 / (h * (h * self.stiffness + self.damping))
+    }
+}
+
+impl From<cosim_shared::scene::SpringDesc> for Compliance {
+    fn from(s: cosim_shared::scene::SpringDesc) -> Compliance {
+        Compliance {
+            stiffness: s.stiffness,
+            damping: s.damping,
+        }
+    }
 }
 
 /// Work a step leaves out when the scene does not need it. Pruning is
@@ -252,6 +299,11 @@ impl Model {
                 skips: Skips::default(),
                 lemke_max_pivots: None,
                 fallback: true,
+                contact_compliance: scene
+                    .compliance
+                    .and_then(|c| c.contact)
+                    .map(Compliance::from),
+                joint_compliance: scene.compliance.and_then(|c| c.joint).map(Compliance::from),
                 position_update: s.position_update,
             },
             initial,

@@ -19,6 +19,9 @@
 //! step report counts the contacts projected. Below the slop the
 //! stabilisation acts as before (penetrations of a running simulation are
 //! 1e-12 m with Lemke, 1e-6 m with PGS), so ordinary steps are unchanged.
+//!
+//! Not with a contact compliance (`[compliance.contact]`): there the
+//! penetration is the spring's deflection, which its force removes.
 
 use super::applied::InvMass;
 use super::contact::Contact;
@@ -52,6 +55,9 @@ pub fn deep_penetration(
     lemke: &mut Lemke,
     ws: &mut Projection,
 ) -> Result<usize, LemkeError> {
+    if p.contact_compliance.is_some() {
+        return Ok(0);
+    }
     let deep = contacts
         .iter()
         .filter(|c| c.geom.gap < -PENETRATION_SLOP)

@@ -47,12 +47,20 @@ pub fn select(contacts: &mut [Contact], state: &State, nu_free: &[f64], p: &Para
 }
 
 /// Adds every left-out contact that the new velocities `nu` would close
-/// within the step; returns how many were added.
-pub fn check_left_out(contacts: &mut [Contact], nu: &[f64], h: f64) -> usize {
+/// within the step; returns how many were added. `relaxed`: the answer is
+/// of the relaxed formulation (`mlcp::Offsets::Relaxed`), which asks no
+/// penetrating contact to separate, so a left-out contact fails only if
+/// it would approach (its gap counts as at most zero).
+pub fn check_left_out(contacts: &mut [Contact], nu: &[f64], h: f64, relaxed: bool) -> usize {
     let mut added = 0;
     for c in contacts.iter_mut().filter(|c| !c.in_lcp) {
         let v_n = Row::contact(c, c.geom.normal).velocity(nu);
-        if c.geom.gap / h + v_n < 0.0 {
+        let gap = if relaxed {
+            c.geom.gap.max(0.0)
+        } else {
+            c.geom.gap
+        };
+        if gap / h + v_n < 0.0 {
             c.in_lcp = true;
             added += 1;
         }

@@ -55,6 +55,9 @@ pub struct PgsProblem<'a> {
     /// Rows: `nb` joint rows, `nc` normal rows, then `nd` per friction block.
     pub rows: &'a [Row],
     pub offset: &'a [f64],
+    /// Each row's constraint-force mixing (compliance, `Mlcp::cfm`): the
+    /// row's residual is `G_k^T nu + offset_k + cfm_k lambda_k`.
+    pub cfm: &'a [f64],
     pub nb: usize,
     pub nc: usize,
     pub nd: usize,
@@ -131,7 +134,7 @@ fn natural_map(p: &PgsProblem, z: &[f64], nu: &[f64]) -> f64 {
     let mut sum = 0.0;
     for (i, &pn) in z[..p.nc].iter().enumerate() {
         let k = p.nb + i;
-        sum += term(pn, p.rows[k].velocity(nu) + p.offset[k]);
+        sum += term(pn, p.rows[k].velocity(nu) + p.offset[k] + p.cfm[k] * pn);
     }
     for (f, &i) in p.friction_of.iter().enumerate() {
         let s = z[m + f];
@@ -279,8 +282,12 @@ impl Pgs {
         z: &mut Vec<f64>,
     ) -> PgsInfo {
         self.diag.clear();
-        self.diag
-            .extend(p.rows.iter().map(|row| row.coupling(row, p.minv)));
+        self.diag.extend(
+            p.rows
+                .iter()
+                .zip(p.cfm)
+                .map(|(row, cfm)| row.coupling(row, p.minv) + cfm),
+        );
         nu.clear();
         nu.extend_from_slice(p.nu_free);
         for (k, row) in p.rows.iter().enumerate() {
@@ -326,7 +333,7 @@ impl Pgs {
                 if d <= 0.0 {
                     continue;
                 }
-                let res = row.velocity(nu) + p.offset[k];
+                let res = row.velocity(nu) + p.offset[k] + p.cfm[k] * *lam;
                 let mut new = *lam - omega * res / d;
                 if k >= p.nb {
                     new = new.max(0.0);
@@ -404,7 +411,7 @@ impl Pgs {
         };
         let joint_abs2: f64 = (0..p.nb)
             .map(|k| {
-                let v = p.rows[k].velocity(nu) + p.offset[k];
+                let v = p.rows[k].velocity(nu) + p.offset[k] + p.cfm[k] * lambda[k];
                 v * v
             })
             .sum();
@@ -435,8 +442,8 @@ impl Pgs {
         let mut sum = 0.0;
         for i in 0..p.nc {
             let k = p.nb + i;
-            let un = p.rows[k].velocity(nu) + p.offset[k];
             let pn = lambda[k];
+            let un = p.rows[k].velocity(nu) + p.offset[k] + p.cfm[k] * pn;
             match p.friction_of.iter().position(|&row| row == i) {
                 None => {
                     let r = pn - (pn - un).max(0.0);
