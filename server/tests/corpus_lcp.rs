@@ -248,3 +248,38 @@ fn written_lcps_read_back_to_the_bit() {
         assert_eq!(&again, p);
     }
 }
+
+/// The engine's ladder (`Lemke::solve`: tighter pivot tolerances,
+/// refinement, the regularised rung) on the same corpus changes no
+/// outcome: every problem the single run solves it solves, with the same
+/// pivots where the first rung holds, and the two infeasible ones still end
+/// on a ray.
+#[test]
+fn the_ladder_keeps_every_corpus_outcome() {
+    let dir = data("");
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    for name in names {
+        let p = load(&name);
+        let n = p.q.len();
+        let lcp = Lcp {
+            n,
+            m: &p.m.data,
+            q: &p.q,
+        };
+        let mut z = vec![0.0; n];
+        let plain = Lemke::new().solve_plain(&lcp, &mut z);
+        let ladder = Lemke::new().solve(&lcp, &mut z);
+        match (plain, ladder) {
+            (Ok(a), Ok(b)) => {
+                assert_eq!(a.work, b.work, "{name}: the first rung is the single run");
+                assert!(relative_residual(&lcp, &z) <= 1e-8, "{name}");
+            }
+            (Err(LemkeError::RayTermination { .. }), Err(LemkeError::RayTermination { .. })) => {}
+            (a, b) => panic!("{name}: single run {a:?}, ladder {b:?}"),
+        }
+    }
+}

@@ -27,7 +27,7 @@
 //!    converged.
 
 use super::applied::InvMass;
-use super::fallback::{cheap_allowance, Fallback, Step, BUDGET_FACTOR};
+use super::fallback::{cheap_allowance, round_off, Fallback, Step, BUDGET_FACTOR};
 use super::mlcp::{Mlcp, Offsets};
 use super::solver::{pgs, Lcp, Pgs, PgsInfo, PgsParams, PgsProblem};
 use super::state::State;
@@ -84,7 +84,12 @@ pub fn solve(
         };
     }
     let gain = m.kinetic_change_rows(&m.lambda, step.nu_free, nu);
-    let allowance = cheap_allowance(m, step.nu_free, p, step.minv);
+    let quick = round_off(step.nu_free);
+    let allowance = if gain <= quick {
+        quick
+    } else {
+        cheap_allowance(m, step.nu_free, p, step.minv)
+    };
     // NOTE: the trigger is the energy alone, not convergence: PGS stops at
     // its cap on a jointed chain in contact for want of sweeps, not of a
     // solution (joints.toml: 21 of 1000 steps), and relaxing those steps
