@@ -1018,3 +1018,36 @@ fn on_failure_pause_tries_a_failed_step_once_and_waits() {
         "one row per attempt"
     );
 }
+
+/// Issue 15, defect 1: a second server of a taken name, pointed at the
+/// first one's folder with another scene, is refused before it writes a
+/// file there: the first run's recording stays its own and replays.
+#[test]
+fn a_refused_server_leaves_the_first_ones_recording_alone() {
+    let (first, dir, name) =
+        serve_test("refused-files", &["--steps", "2000000", "--realtime", "1"]);
+    let scene_before = std::fs::read_to_string(dir.path().join("scene.toml")).unwrap();
+    let out = Command::new(EXE)
+        .args([
+            "serve", "--quiet", "--name", &name, "--dt", "0.002", "--out",
+        ])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("scene.toml")).unwrap(),
+        scene_before,
+        "the refused server rewrote the first one's scene.toml"
+    );
+    Connection::connect(&name).unwrap().shutdown().unwrap();
+    let (status, stderr) = first.finish();
+    assert!(status.success(), "{stderr}");
+    let (ok, text) = replay(dir.path());
+    assert!(ok, "{text}");
+}

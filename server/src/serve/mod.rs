@@ -239,11 +239,14 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         }
     }
     let toml = scene.to_toml();
+    // NOTE: the name first: a server refused because another of its name
+    // runs must not touch that one's folder (issue 15: a refused server
+    // rewrote scene.toml and the first run's replay failed at step 1).
+    let svc = Services::create(&opts.name)?;
     if let Some(out) = &opts.out {
         std::fs::create_dir_all(out)?;
         std::fs::write(out.join("scene.toml"), &toml)?;
     }
-    let svc = Services::create(&opts.name)?;
     let files = match &opts.out {
         Some(out) => Some(Files {
             writers: Writers::create(out)?,
