@@ -200,9 +200,7 @@ fn a_controller_answers_every_step_in_lockstep_and_the_run_replays_bit_for_bit()
         let f = match c.next_state(Duration::from_secs(10)) {
             Ok(f) => f,
             Err(ClientError::Shutdown) => {
-                // The final state comes with the shutdown frame right
-                // behind it: read as a frame of its own, or only in the
-                // shutdown frame, which carries the same state.
+                // The final state comes only in the shutdown frame.
                 let last = *c.last_state().unwrap();
                 if seen.last() != Some(&last.step) {
                     seen.push(last.step);
@@ -223,8 +221,7 @@ fn a_controller_answers_every_step_in_lockstep_and_the_run_replays_bit_for_bit()
     assert!(status.success(), "{stderr}");
     // Lockstep: every state 0..=300 seen once, in order, none skipped.
     assert_eq!(seen, (0..=300).collect::<Vec<u64>>());
-    // Inputs for 0..=299 applied; an answer to the final state may arrive
-    // after the server stopped listening.
+    // Inputs for 0..=299 applied; the final state asks for none.
     let s = summary(dir.path());
     assert_eq!(s["steps"], 300);
     assert_eq!(s["inputs_applied"], 300);
@@ -1050,4 +1047,54 @@ fn a_refused_server_leaves_the_first_ones_recording_alone() {
     assert!(status.success(), "{stderr}");
     let (ok, text) = replay(dir.path());
     assert!(ok, "{text}");
+}
+
+/// Issue 15, defect 7: the final state went out twice, first without the
+/// last-frame bit, and a controller's answer to that first copy was
+/// dropped uncounted. Now a monitor that reads every frame sees the final
+/// step once, with the bit, and every answer the controller sent is
+/// accounted for in summary.json.
+#[test]
+fn the_final_state_is_published_once_with_the_last_bit() {
+    let (server, dir, name) = serve_test("final-once", &["--controllers", "1", "--steps", "50"]);
+    let monitor = Monitor::open(&name, 1024).expect("monitor");
+    let mut c = Controller::join(&name, WaitMode::Block).expect("join");
+    let mut sent = 0u64;
+    loop {
+        match c.next_state(Duration::from_secs(10)) {
+            Ok(_) => {
+                c.send(InputFrame::default()).expect("send");
+                sent += 1;
+            }
+            Err(ClientError::Shutdown) => break,
+            Err(e) => panic!("{e}"),
+        }
+    }
+    let mut finals = Vec::new();
+    loop {
+        let f = monitor.next(Duration::from_secs(10)).expect("frame");
+        if f.step == 50 {
+            finals.push(f.status & STATUS_SHUTDOWN != 0);
+        }
+        if f.status & STATUS_SHUTDOWN != 0 {
+            break;
+        }
+    }
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    assert_eq!(
+        finals,
+        vec![true],
+        "the final step's frames (last bit set?)"
+    );
+    let s = summary(dir.path());
+    let rejected: u64 = s["inputs_rejected"]
+        .as_object()
+        .map_or(0, |m| m.values().filter_map(|v| v.as_u64()).sum());
+    assert_eq!(sent, 50, "one answer per step taken");
+    assert_eq!(
+        s["inputs_applied"].as_u64().unwrap() + rejected,
+        sent,
+        "{s}"
+    );
 }

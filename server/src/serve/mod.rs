@@ -223,6 +223,9 @@ struct Server {
     c: Counters,
     /// A failed step under `--on-failure abort`: the loop stops.
     failed_stop: bool,
+    /// The last frame (with `STATUS_SHUTDOWN`) went out with the final
+    /// state already.
+    final_published: bool,
 }
 
 /// Runs a server on `scene` until `--steps`, a shutdown request or a
@@ -283,6 +286,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         scene_torque,
         c: Counters::default(),
         failed_stop: false,
+        final_published: false,
         engine,
         svc,
         opts,
@@ -292,8 +296,14 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
     let wall = started.elapsed().as_secs_f64();
     s.c.stepping_seconds = s.stepping.map_or(0.0, |t| t.elapsed().as_secs_f64());
     // The last frame tells every reader the server is gone.
-    s.status |= STATUS_SHUTDOWN;
-    let _ = s.publish();
+    if !s.final_published {
+        s.status |= STATUS_SHUTDOWN;
+        let _ = s.publish();
+    }
+    // Answers that arrived after the last step (to a frame published
+    // before a shutdown request or a signal) are logged and counted, not
+    // dropped silently.
+    s.drain_inputs();
     if let Some(f) = s.files.as_mut() {
         f.writers.flush()?;
         f.logs.flush()?;
@@ -402,6 +412,17 @@ impl Server {
             if self.failed_stop {
                 self.publish()?;
                 return Ok(Ending::Failed);
+            }
+            if self.opts.steps.is_some_and(|n| self.c.steps >= n) {
+                // The final state goes out once, with the last-frame bit:
+                // published without it, a controller would answer a step
+                // that is never taken (issue 15, defect 7).
+                self.status |= STATUS_SHUTDOWN;
+                self.publish()?;
+                self.final_published = true;
+                // --realtime: the run lasts its simulated time, as before.
+                pace.wait(self.engine.state().t);
+                return Ok(Ending::Steps);
             }
             let t_publish = Instant::now();
             self.c
@@ -589,6 +610,17 @@ impl Server {
                 Ok(Flow::Go)
             }
             MissPolicy::Hold | MissPolicy::Zero => Ok(Flow::Go),
+        }
+    }
+
+    /// Logs every input still queued as `after_end` (the run took no
+    /// further step) and counts it under that reason.
+    fn drain_inputs(&mut self) {
+        while let Ok(Some(input)) = self.svc.receive_input() {
+            *self.c.inputs_rejected.entry("after_end").or_default() += 1;
+            if let Some(f) = self.files.as_mut() {
+                let _ = f.logs.input(&input, "after_end");
+            }
         }
     }
 
