@@ -1098,3 +1098,39 @@ fn the_final_state_is_published_once_with_the_last_bit() {
         "{s}"
     );
 }
+
+/// Issue 15, defect 3: the round trip is timed from the publish. Paced at
+/// real time, the server publishes a state and then waits for the next
+/// step's due time, while the controller computes (0.3 ms here) and
+/// answers; the old timer started after that wait and read a few us.
+#[test]
+fn the_round_trip_is_timed_from_the_publish() {
+    let (server, dir, name) = serve_test(
+        "round-trip",
+        &["--controllers", "1", "--steps", "40", "--realtime", "1"],
+    );
+    let mut c = Controller::join(&name, WaitMode::Block).expect("join");
+    loop {
+        match c.next_state(Duration::from_secs(10)) {
+            Ok(_) => {
+                // The controller's compute: 0.3 ms of work.
+                let start = Instant::now();
+                while start.elapsed() < Duration::from_micros(300) {
+                    std::hint::spin_loop();
+                }
+                c.send(InputFrame::default()).expect("send");
+            }
+            Err(ClientError::Shutdown) => break,
+            Err(e) => panic!("{e}"),
+        }
+    }
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    let s = summary(dir.path());
+    let median = s["round_trip_us"]["median"].as_f64().unwrap();
+    eprintln!("round trip median {median} us; wall {}", s["wall_seconds"]);
+    assert!(
+        median >= 300.0,
+        "round trip median {median} us with 0.3 ms of compute"
+    );
+}
