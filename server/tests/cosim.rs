@@ -952,6 +952,8 @@ fn on_failure_abort_stops_at_the_first_failed_step() {
     let (status, stderr) = server.finish();
     assert_eq!(status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("--on-failure abort: stopping"), "{stderr}");
+    // Issue 15: a stderr that is not a terminal gets no colour codes.
+    assert!(!stderr.contains('\u{1b}'), "ANSI codes in {stderr:?}");
     let s = summary(dir.path());
     assert_eq!(s["ending"], "failed");
     assert_eq!(
