@@ -1136,3 +1136,31 @@ fn the_round_trip_is_timed_from_the_publish() {
         "round trip median {median} us with 0.3 ms of compute"
     );
 }
+
+/// Issue 15, point 11: `wall_seconds` holds the wait for the controllers
+/// to join; `stepping_seconds` is the loop's own time, and the printed
+/// rate is taken over it. The controller joins 0.3 s after the server is
+/// up; 50 steps take far less.
+#[test]
+fn the_summary_tells_the_stepping_from_the_wait_for_controllers() {
+    let (server, dir, name) = serve_test("stepping", &["--controllers", "1", "--steps", "50"]);
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_millis(300) {
+        std::hint::spin_loop();
+    }
+    let mut c = Controller::join(&name, WaitMode::Block).expect("join");
+    loop {
+        match c.next_state(Duration::from_secs(10)) {
+            Ok(_) => c.send(InputFrame::default()).expect("send"),
+            Err(ClientError::Shutdown) => break,
+            Err(e) => panic!("{e}"),
+        }
+    }
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    let s = summary(dir.path());
+    let wall = s["wall_seconds"].as_f64().unwrap();
+    let stepping = s["stepping_seconds"].as_f64().unwrap();
+    assert!(wall >= 0.3, "{s}");
+    assert!(stepping < wall - 0.25, "stepping {stepping} s of {wall} s");
+}

@@ -1042,6 +1042,7 @@ impl Server {
             "projected_contacts": c.projected_contacts,
             "early_matrix_steps": c.early_matrix_steps,
             "wall_seconds": wall,
+            "stepping_seconds": c.stepping_seconds,
         });
         match &self.opts.out {
             Some(out) => std::fs::write(
