@@ -1164,3 +1164,40 @@ fn the_summary_tells_the_stepping_from_the_wait_for_controllers() {
     assert!(wall >= 0.3, "{s}");
     assert!(stepping < wall - 0.25, "stepping {stepping} s of {wall} s");
 }
+
+/// Issue 15, point 9: a monitor that joins (role 2) gets an id of its own,
+/// is counted in monitor_count, and leaves with that id; a controller's
+/// ids are not taken by it.
+#[test]
+fn a_monitor_joins_with_an_id_and_leaves_with_it() {
+    use cosim_shared::wire::{ControlRequest, CMD_JOIN, CMD_LEAVE, ROLE_MONITOR};
+    let (server, _dir, name) =
+        serve_test("monitor-join", &["--steps", "2000000", "--realtime", "1"]);
+    let conn = Connection::connect(&name).expect("connect");
+    let joined = conn
+        .request(
+            ControlRequest {
+                command: CMD_JOIN,
+                role: ROLE_MONITOR,
+                ..Default::default()
+            },
+            Duration::from_secs(5),
+        )
+        .expect("monitor join");
+    assert_ne!(joined.controller_id, 0, "a monitor's id");
+    assert_eq!(conn.info().unwrap().monitor_count, 1);
+    let c = Controller::join(&name, WaitMode::Block).expect("controller join");
+    assert_ne!(c.id(), joined.controller_id);
+    conn.request(
+        ControlRequest {
+            command: CMD_LEAVE,
+            controller_id: joined.controller_id,
+            ..Default::default()
+        },
+        Duration::from_secs(5),
+    )
+    .expect("monitor leave");
+    assert_eq!(conn.info().unwrap().monitor_count, 0);
+    drop(c);
+    drop(server);
+}

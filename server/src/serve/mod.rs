@@ -203,7 +203,8 @@ struct Server {
     model_hash: u64,
     slots: Vec<Slot>,
     next_id: u32,
-    monitors: u32,
+    /// Ids of the monitors that joined (see `join`).
+    monitors: Vec<u32>,
     paused: bool,
     /// Steps left of a `step N` command.
     budget: Option<u64>,
@@ -273,7 +274,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         toml,
         slots: Vec::with_capacity(MAX_CONTROLLERS),
         next_id: 1,
-        monitors: 0,
+        monitors: Vec::new(),
         paused: false,
         budget: None,
         deferred: Vec::new(),
@@ -797,7 +798,7 @@ impl Server {
         r.body_count = self.engine.model().bodies.len() as u32;
         r.joint_count = self.engine.model().joints.len() as u32;
         r.controller_count = self.slots.len() as u32;
-        r.monitor_count = self.monitors;
+        r.monitor_count = self.monitors.len() as u32;
         r.paused = u32::from(self.paused);
         r.pid = u64::from(std::process::id());
         if let Err(e) = req.send_copy(r) {
@@ -832,6 +833,10 @@ impl Server {
             }
             match r.command {
                 CMD_JOIN => self.join(&req, &r)?,
+                CMD_LEAVE if self.monitors.contains(&r.controller_id) => {
+                    self.monitors.retain(|&m| m != r.controller_id);
+                    self.respond(&req, ControlResponse::default());
+                }
                 CMD_LEAVE => {
                     // NOTE: inputs sent before the leave are in the buffer
                     // now; an answer to the coming step still applies to
@@ -918,8 +923,20 @@ impl Server {
 
     fn join(&mut self, req: &Request, r: &ControlRequest) -> Result<(), ServeError> {
         if r.role == ROLE_MONITOR {
-            self.monitors += 1;
-            self.respond(req, ControlResponse::default());
+            // A monitor need not join (subscribing to the state is enough);
+            // one that does is counted in monitor_count until it leaves
+            // with the id it gets, from the controllers' sequence (issue
+            // 15: it got id 0, could not leave, and was counted for ever).
+            let id = self.next_id;
+            self.next_id += 1;
+            self.monitors.push(id);
+            self.respond(
+                req,
+                ControlResponse {
+                    controller_id: id,
+                    ..Default::default()
+                },
+            );
             return Ok(());
         }
         if self.slots.len() >= MAX_CONTROLLERS {
