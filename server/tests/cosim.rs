@@ -330,9 +330,7 @@ fn bad_inputs_are_rejected_by_reason_and_the_run_goes_on() {
     assert_eq!(r["non_finite"], 2, "{s}");
     assert_eq!(r["unknown_index"], 1, "{s}");
     assert_eq!(r["wrong_step"], 1, "{s}");
-    // (A second answer to a step may land after the server stepped on, so
-    // it is a wrong step or a duplicate by timing; the unit tests pin the
-    // rule. A joint given twice in one input is always a duplicate.)
+    // A joint given twice in one input is a duplicate.
     assert_eq!(r["duplicate"], 1, "{s}");
     assert_eq!(s["inputs_applied"], 40 - 4);
     assert_eq!(
@@ -1200,4 +1198,40 @@ fn a_monitor_joins_with_an_id_and_leaves_with_it() {
     assert_eq!(conn.info().unwrap().monitor_count, 0);
     drop(c);
     drop(server);
+}
+
+/// Issue 15, defect 8: a second answer to a step is a duplicate whether the
+/// server reads it in the same wait or in the next step's (with one
+/// controller it is read in the next one's, and counted as a wrong step
+/// before). Every step answered twice: 30 duplicates, no wrong step.
+#[test]
+fn a_second_answer_is_a_duplicate_whenever_it_is_read() {
+    let (server, dir, name) = serve_test("second-answer", &["--controllers", "1", "--steps", "30"]);
+    let mut c = Controller::join(&name, WaitMode::Block).expect("join");
+    loop {
+        match c.next_state(Duration::from_secs(10)) {
+            Ok(_) => {
+                c.send(InputFrame::default()).expect("send");
+                // The same answer again, as a confused client would.
+                let again = InputFrame {
+                    controller_id: c.id(),
+                    step: c.last_state().unwrap().step,
+                    version: cosim_client::PROTOCOL_VERSION,
+                    ..Default::default()
+                };
+                c.send_raw(&again).expect("send again");
+            }
+            Err(ClientError::Shutdown) => break,
+            Err(e) => panic!("{e}"),
+        }
+    }
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    let s = summary(dir.path());
+    let r = &s["inputs_rejected"];
+    assert_eq!(s["inputs_applied"], 30, "{s}");
+    assert!(r.get("wrong_step").is_none(), "{s}");
+    // The last step's second answer may come after the run ended.
+    let late = r.get("after_end").and_then(|v| v.as_u64()).unwrap_or(0);
+    assert_eq!(r["duplicate"].as_u64().unwrap() + late, 30, "{s}");
 }

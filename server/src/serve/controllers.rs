@@ -147,11 +147,15 @@ pub fn check(
     let Some(slot) = slot else {
         return reject(REJECT_UNKNOWN_CONTROLLER, false);
     };
+    // A second answer to the step this controller answered last is a
+    // duplicate whenever it is read: in the same wait, or in the next
+    // step's, where it used to count as a wrong step (issue 15: the
+    // reason depended on timing). Any other step is a wrong step.
+    if slot.answered == Some(input.step) {
+        return reject(REJECT_DUPLICATE, false);
+    }
     if input.step != step {
         return reject(REJECT_WRONG_STEP, false);
-    }
-    if slot.answered == Some(step) {
-        return reject(REJECT_DUPLICATE, false);
     }
     let (nt, ni) = (input.torque_count as usize, input.impulse_count as usize);
     if nt > MAX_JOINTS || ni > MAX_BODIES {
@@ -295,6 +299,16 @@ mod tests {
             REJECT_DUPLICATE
         );
         assert_eq!(check(&input(6), Some(&slot), 6, LIM), Ok(()));
+        // Read in the next step's wait: still a duplicate, not a wrong step.
+        assert_eq!(
+            reason(check(&input(5), Some(&slot), 6, LIM)),
+            REJECT_DUPLICATE
+        );
+        // A step it never answered: a wrong step.
+        assert_eq!(
+            reason(check(&input(3), Some(&slot), 6, LIM)),
+            REJECT_WRONG_STEP
+        );
     }
 
     #[test]

@@ -969,6 +969,13 @@ impl Server {
     fn change_state(&mut self, req: &Request) -> Result<bool, ServeError> {
         let r = *req.payload();
         let step = self.engine.state().step;
+        if matches!(r.command, CMD_RESET | CMD_RESTORE) {
+            // The steps start over: an answer to a step number answered
+            // before the jump is an answer, not a duplicate.
+            for s in &mut self.slots {
+                s.answered = None;
+            }
+        }
         match r.command {
             CMD_RESET => {
                 self.engine.set_state(self.initial.clone());
