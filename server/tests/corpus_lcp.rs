@@ -18,6 +18,16 @@ fn load(name: &str) -> LcpProblem {
     read_lcp(&text).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
+/// Every problem file of the corpus, sorted.
+fn corpus_names() -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(data(""))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
 fn check_lcp(name: &str) -> Result<(SolveInfo, Vec<f64>), LemkeError> {
     let p = load(name);
     let n = p.q.len();
@@ -130,12 +140,7 @@ fn pgs_solves_the_symmetric_psd_problems_and_reports_the_rest() {
         max_iterations: 20_000,
         ..PgsParams::default()
     };
-    let dir = data("");
-    let mut names: Vec<String> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
+    let names = corpus_names();
     assert_eq!(names.len(), 20);
     let mut solved = Vec::new();
     for name in &names {
@@ -256,12 +261,7 @@ fn written_lcps_read_back_to_the_bit() {
 /// on a ray.
 #[test]
 fn the_ladder_keeps_every_corpus_outcome() {
-    let dir = data("");
-    let mut names: Vec<String> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
+    let names = corpus_names();
     for name in names {
         let p = load(&name);
         let n = p.q.len();

@@ -168,6 +168,17 @@ fn replay(dir: &Path) -> (bool, String) {
     )
 }
 
+/// Answers every state with `answer` until the server's last frame.
+fn answer_until_shutdown(c: &mut Controller, mut answer: impl FnMut(&mut Controller)) {
+    loop {
+        match c.next_state(Duration::from_secs(10)) {
+            Ok(_) => answer(c),
+            Err(ClientError::Shutdown) => return,
+            Err(e) => panic!("{e}"),
+        }
+    }
+}
+
 /// The rows of states.csv for one body: (step, x, y, z).
 fn positions(dir: &Path, body: &str) -> Vec<(u64, [f64; 3])> {
     let text = std::fs::read_to_string(dir.join("states.csv")).expect("states.csv");
@@ -771,13 +782,7 @@ fn on_miss_pause_waits_for_resume_and_the_late_answer_counts() {
     // The late answer to step 0, then resume: the run completes.
     c.send(InputFrame::default()).unwrap();
     conn.resume().unwrap();
-    loop {
-        match c.next_state(Duration::from_secs(10)) {
-            Ok(_) => c.send(InputFrame::default()).unwrap(),
-            Err(ClientError::Shutdown) => break,
-            Err(e) => panic!("{e}"),
-        }
-    }
+    answer_until_shutdown(&mut c, |c| c.send(InputFrame::default()).unwrap());
     let (status, stderr) = server.finish();
     assert!(status.success(), "{stderr}");
     let s = summary(dir.path());
@@ -860,43 +865,21 @@ fn spinning_server_and_controller_skip_the_events_and_stay_in_lockstep() {
 /// mu = 1, overlapping each by 0.05 mm (under the projection's slop): the
 /// stabilisation asks it to leave both walls, and friction at each wall
 /// locks the motion out of the other. The rigid LCP has no solution.
-const LOCKED_CORNER: &str = r#"[sim]
-name = "locked_corner"
-dt = 0.001
-steps = 50
-gravity = [0.0, 0.0, -9.81]
-friction_directions = 8
-solver = "lemke"
-
-[[body]]
-name = "ball"
-radius = 0.1
-mass = 1.0
-position = [0.09995, 0.09995, 0.09995]
-friction = 1.0
-restitution = 0.0
-
-[[plane]]
-name = "wall_x"
-normal = [1.0, 0.0, 0.0]
-point = [0.0, 0.0, 0.0]
-friction = 1.0
-restitution = 0.0
-
-[[plane]]
-name = "wall_y"
-normal = [0.0, 1.0, 0.0]
-point = [0.0, 0.0, 0.0]
-friction = 1.0
-restitution = 0.0
-
-[[plane]]
-name = "floor"
-normal = [0.0, 0.0, 1.0]
-point = [0.0, 0.0, 0.0]
-friction = 1.0
-restitution = 0.0
-"#;
+fn locked_corner() -> String {
+    use cosim_server::bench::text::{plane, sphere};
+    let mut s = "[sim]\nname = \"locked_corner\"\ndt = 0.001\nsteps = 50\n\
+                 gravity = [0.0, 0.0, -9.81]\nfriction_directions = 8\nsolver = \"lemke\"\n"
+        .to_string();
+    s += &sphere("ball", 0.1, 1.0, [0.09995; 3], [0.0; 3], 1.0, 0.0);
+    for (name, n) in [
+        ("wall_x", [1.0, 0.0, 0.0]),
+        ("wall_y", [0.0, 1.0, 0.0]),
+        ("floor", [0.0, 0.0, 1.0]),
+    ] {
+        s += &plane(name, n, [0.0; 3], 1.0, 0.0);
+    }
+    s
+}
 
 /// The locked corner served with `--on-failure POLICY` (and `extra`).
 fn serve_locked(
@@ -906,7 +889,7 @@ fn serve_locked(
 ) -> (ServerProc, TempDir, TempDir, String) {
     let scene_dir = TempDir::new(&format!("{test}-scene"));
     let scene = scene_dir.path().join("locked_corner.toml");
-    std::fs::write(&scene, LOCKED_CORNER).expect("scene file");
+    std::fs::write(&scene, locked_corner()).expect("scene file");
     let scene = scene.display().to_string();
     let mut args = vec![scene.as_str(), "--on-failure", policy];
     args.extend_from_slice(extra);
@@ -1060,16 +1043,10 @@ fn the_final_state_is_published_once_with_the_last_bit() {
     let monitor = Monitor::open(&name, 1024).expect("monitor");
     let mut c = Controller::join(&name, WaitMode::Block).expect("join");
     let mut sent = 0u64;
-    loop {
-        match c.next_state(Duration::from_secs(10)) {
-            Ok(_) => {
-                c.send(InputFrame::default()).expect("send");
-                sent += 1;
-            }
-            Err(ClientError::Shutdown) => break,
-            Err(e) => panic!("{e}"),
-        }
-    }
+    answer_until_shutdown(&mut c, |c| {
+        c.send(InputFrame::default()).expect("send");
+        sent += 1;
+    });
     let mut finals = Vec::new();
     loop {
         let f = monitor.next(Duration::from_secs(10)).expect("frame");
@@ -1110,20 +1087,14 @@ fn the_round_trip_is_timed_from_the_publish() {
         &["--controllers", "1", "--steps", "40", "--realtime", "1"],
     );
     let mut c = Controller::join(&name, WaitMode::Block).expect("join");
-    loop {
-        match c.next_state(Duration::from_secs(10)) {
-            Ok(_) => {
-                // The controller's compute: 0.3 ms of work.
-                let start = Instant::now();
-                while start.elapsed() < Duration::from_micros(300) {
-                    std::hint::spin_loop();
-                }
-                c.send(InputFrame::default()).expect("send");
-            }
-            Err(ClientError::Shutdown) => break,
-            Err(e) => panic!("{e}"),
+    answer_until_shutdown(&mut c, |c| {
+        // The controller's compute: 0.3 ms of work.
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_micros(300) {
+            std::hint::spin_loop();
         }
-    }
+        c.send(InputFrame::default()).expect("send");
+    });
     let (status, stderr) = server.finish();
     assert!(status.success(), "{stderr}");
     let s = summary(dir.path());
@@ -1147,13 +1118,7 @@ fn the_summary_tells_the_stepping_from_the_wait_for_controllers() {
         std::hint::spin_loop();
     }
     let mut c = Controller::join(&name, WaitMode::Block).expect("join");
-    loop {
-        match c.next_state(Duration::from_secs(10)) {
-            Ok(_) => c.send(InputFrame::default()).expect("send"),
-            Err(ClientError::Shutdown) => break,
-            Err(e) => panic!("{e}"),
-        }
-    }
+    answer_until_shutdown(&mut c, |c| c.send(InputFrame::default()).expect("send"));
     let (status, stderr) = server.finish();
     assert!(status.success(), "{stderr}");
     let s = summary(dir.path());
@@ -1208,23 +1173,17 @@ fn a_monitor_joins_with_an_id_and_leaves_with_it() {
 fn a_second_answer_is_a_duplicate_whenever_it_is_read() {
     let (server, dir, name) = serve_test("second-answer", &["--controllers", "1", "--steps", "30"]);
     let mut c = Controller::join(&name, WaitMode::Block).expect("join");
-    loop {
-        match c.next_state(Duration::from_secs(10)) {
-            Ok(_) => {
-                c.send(InputFrame::default()).expect("send");
-                // The same answer again, as a confused client would.
-                let again = InputFrame {
-                    controller_id: c.id(),
-                    step: c.last_state().unwrap().step,
-                    version: cosim_client::PROTOCOL_VERSION,
-                    ..Default::default()
-                };
-                c.send_raw(&again).expect("send again");
-            }
-            Err(ClientError::Shutdown) => break,
-            Err(e) => panic!("{e}"),
-        }
-    }
+    answer_until_shutdown(&mut c, |c| {
+        c.send(InputFrame::default()).expect("send");
+        // The same answer again, as a confused client would.
+        let again = InputFrame {
+            controller_id: c.id(),
+            step: c.last_state().unwrap().step,
+            version: cosim_client::PROTOCOL_VERSION,
+            ..Default::default()
+        };
+        c.send_raw(&again).expect("send again");
+    });
     let (status, stderr) = server.finish();
     assert!(status.success(), "{stderr}");
     let s = summary(dir.path());

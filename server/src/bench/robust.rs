@@ -389,15 +389,7 @@ pub fn run(scenes: u64, steps: u64, seed0: u64, solver: SolverChoice) -> Result<
         if let (None, Some(f)) = (&sum.first_failure, c.first_failure) {
             sum.first_failure = Some((seed, f));
         }
-        let l = &mut sum.ladder;
-        for (a, b) in l.rungs.iter_mut().zip(c.ladder.rungs) {
-            *a += b;
-        }
-        l.refined += c.ladder.refined;
-        l.relaxed += c.ladder.relaxed;
-        l.compliant += c.ladder.compliant;
-        l.max_compliance = l.max_compliance.max(c.ladder.max_compliance);
-        l.energy_refused += c.ladder.energy_refused;
+        sum.ladder.merge(&c.ladder);
         if c.kinetic > sum.worst_kinetic.0 {
             sum.worst_kinetic = (c.kinetic, seed);
         }

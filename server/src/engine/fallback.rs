@@ -15,7 +15,7 @@
 //!
 //! A rigid answer is also refused, and the step relaxed, when it gives more
 //! kinetic energy than the free motion plus what the stabilisation may give
-//! ([`Mlcp::stabilisation_budget`], with a factor [`BUDGET_FACTOR`]): the
+//! ([`allowance`], [`explained`]): the
 //! solvable neighbours of an unsolvable LCP have huge impulses, and their
 //! answers inject energy through the offsets (see there).
 //!
@@ -108,28 +108,45 @@ pub struct Solved {
     pub allowance: f64,
 }
 
-/// The rigid answer's energy check. A rigid answer, recovered into `nu`,
-/// passes outright when it gives no more kinetic energy than the free
-/// motion plus [`BUDGET_FACTOR`] times the stabilisation budget (most
-/// steps: a resting or sliding contact, a bounce). Otherwise it is held
-/// against the relaxed answer of the same step: it may gain what the
-/// relaxed answer gains (if anything), plus the work its offsets would do
-/// at the relaxed impulses (`Mlcp::offset_work`), times `BUDGET_FACTOR`,
-/// plus the budget.
-/// A jointed chain that swings holds its joints with impulses of the
-/// relaxed answer's size and passes; a chain locked against a contact
-/// (joint_torques, step 2069: 1.7e5 N s) needs impulses 1e4 times those
-/// of the relaxed answer and fails.
-pub fn cheap_allowance(m: &Mlcp, nu_free: &[f64], p: &Params, minv: &[InvMass]) -> f64 {
-    BUDGET_FACTOR * m.stabilisation_budget(p, minv) + round_off(nu_free)
+/// The rigid answer's energy check, first part: the kinetic energy an
+/// answer that gains `gain` over the free motion may gain. Gains at
+/// round-off pass outright (most steps lose energy to their constraints,
+/// and then the budget, a coupling per row, need not be formed); others
+/// may gain [`BUDGET_FACTOR`] times the stabilisation budget (a resting or
+/// sliding contact, a bounce).
+pub fn allowance(m: &Mlcp, gain: f64, step: Step) -> f64 {
+    let free: f64 = 0.5 * step.nu_free.iter().map(|v| v * v).sum::<f64>();
+    let round_off = ENERGY_ABSOLUTE + ENERGY_RELATIVE * free;
+    if gain <= round_off {
+        round_off
+    } else {
+        BUDGET_FACTOR * m.stabilisation_budget(step.params, step.minv) + round_off
+    }
 }
 
-/// Kinetic energy gains at or below this are round-off of the energy sums
-/// (J): most steps lose energy to their constraints, and then the budget,
-/// a coupling per row, need not be formed.
-pub fn round_off(nu_free: &[f64]) -> f64 {
-    let free: f64 = 0.5 * nu_free.iter().map(|v| v * v).sum::<f64>();
-    ENERGY_ABSOLUTE + ENERGY_RELATIVE * free
+/// The energy check, second part, for an answer that gained more than its
+/// [`allowance`]: held against the relaxed answer of the same step, it may
+/// gain what the relaxed answer gains (if anything; a relaxed answer that
+/// dissipates does not pull the bound below the offsets' work: S4 at
+/// h = 1e-2, step 112, had a healthy rigid gain of 1.1e-5 J against a
+/// relaxed loss of 6.1e-5 J and was refused), plus `BUDGET_FACTOR` times
+/// the work its offsets would do at the relaxed impulses
+/// (`Mlcp::offset_work`), plus the allowance. A jointed chain that swings
+/// holds its joints with impulses of the relaxed answer's size and passes;
+/// a chain locked against a contact (joint_torques, step 2069: 1.7e5 N s)
+/// needs impulses 1e4 times those of the relaxed answer and fails.
+pub fn explained(relaxed_gain: f64, work: f64, allowance: f64) -> f64 {
+    relaxed_gain.max(0.0) + BUDGET_FACTOR * work + allowance
+}
+
+/// Lemke on the LCP `m` holds, into `m.z`.
+fn lemke_on(lemke: &mut Lemke, m: &mut Mlcp) -> Result<SolveInfo, LemkeError> {
+    let lcp = Lcp {
+        n: m.lcp_size(),
+        m: &m.lcp_m,
+        q: &m.lcp_q,
+    };
+    lemke.solve(&lcp, &mut m.z)
 }
 
 /// Solves the step's LCP (right-hand side already formed with
@@ -150,19 +167,11 @@ pub fn solve(
         nu_free,
         contacts,
         params: p,
-        minv,
+        ..
     } = step;
-    let n = m.lcp_size();
     let rigid = match guessed {
         Some(info) => Ok(info),
-        None => {
-            let lcp = Lcp {
-                n,
-                m: &m.lcp_m,
-                q: &m.lcp_q,
-            };
-            lemke.solve(&lcp, &mut m.z)
-        }
+        None => lemke_on(lemke, m),
     };
     let mut energy_refused = false;
     if !p.fallback {
@@ -180,12 +189,7 @@ pub fn solve(
         Ok(info) => {
             m.recover(nu_free, nu);
             let gain = m.kinetic_change(nu_free, nu);
-            let quick = round_off(nu_free);
-            let allowance = if gain <= quick {
-                quick
-            } else {
-                cheap_allowance(m, nu_free, p, minv)
-            };
+            let allowance = allowance(m, gain, step);
             if gain <= allowance {
                 return Ok(Solved {
                     info,
@@ -200,20 +204,10 @@ pub fn solve(
             scratch.offset.clear();
             scratch.offset.extend_from_slice(&m.offset);
             m.rhs(nu_free, contacts, p, Offsets::Relaxed);
-            let lcp = Lcp {
-                n,
-                m: &m.lcp_m,
-                q: &m.lcp_q,
-            };
-            if let Ok(relaxed) = lemke.solve(&lcp, &mut m.z) {
+            if let Ok(relaxed) = lemke_on(lemke, m) {
                 m.recover(nu_free, nu);
                 let relaxed_gain = m.kinetic_change(nu_free, nu);
-                let work = m.offset_work(&scratch.offset);
-                // A relaxed answer that dissipates does not lower the bound
-                // below the offsets' work: S4 at h = 1e-2, step 112, had
-                // a healthy rigid gain of 1.1e-5 J against a relaxed loss
-                // of 6.1e-5 J and was refused.
-                let bound = relaxed_gain.max(0.0) + BUDGET_FACTOR * work + allowance;
+                let bound = explained(relaxed_gain, m.offset_work(&scratch.offset), allowance);
                 if gain <= bound {
                     // The rigid answer stands: the same operations on the
                     // same data as before give the same bits.
@@ -244,22 +238,16 @@ pub fn solve(
         Err(e) => e,
     };
     m.rhs(nu_free, contacts, p, Offsets::Relaxed);
-    {
-        let lcp = Lcp {
-            n,
-            m: &m.lcp_m,
-            q: &m.lcp_q,
-        };
-        if let Ok(info) = lemke.solve(&lcp, &mut m.z) {
-            m.recover(nu_free, nu);
-            return Ok(Solved {
-                info,
-                fallback: Some(Fallback::Relaxed),
-                energy_refused,
-                allowance: 0.0,
-            });
-        }
+    if let Ok(info) = lemke_on(lemke, m) {
+        m.recover(nu_free, nu);
+        return Ok(Solved {
+            info,
+            fallback: Some(Fallback::Relaxed),
+            energy_refused,
+            allowance: 0.0,
+        });
     }
+    let n = m.lcp_size();
     let scale = m.lcp_m.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
     scratch.diagonal.clear();
     scratch.diagonal.extend((0..n).map(|i| m.lcp_m[i * n + i]));
@@ -268,12 +256,7 @@ pub fn solve(
         for i in 0..n {
             m.lcp_m[i * n + i] = scratch.diagonal[i] + eps;
         }
-        let lcp = Lcp {
-            n,
-            m: &m.lcp_m,
-            q: &m.lcp_q,
-        };
-        let solved = lemke.solve(&lcp, &mut m.z);
+        let solved = lemke_on(lemke, m);
         for i in 0..n {
             m.lcp_m[i * n + i] = scratch.diagonal[i];
         }

@@ -8,7 +8,7 @@
 //! planes went from 5.7 J to 1,645 J in 15 steps, every one at the cap).
 //! So, as with Lemke (`engine::fallback`), an answer, converged or not, is
 //! taken as it is when it gains no more kinetic energy than the energy
-//! check allows (`fallback::cheap_allowance`); otherwise the step is solved
+//! check allows (`fallback::allowance`); otherwise the step is solved
 //! again with [`Offsets::Relaxed`]:
 //!
 //! 1. from the same warm start; a converged relaxed answer is taken (a
@@ -26,8 +26,7 @@
 //!    rigid answer that failed the energy check and is reported as not
 //!    converged.
 
-use super::applied::InvMass;
-use super::fallback::{cheap_allowance, round_off, Fallback, Step, BUDGET_FACTOR};
+use super::fallback::{allowance, explained, Fallback, Step};
 use super::mlcp::{Mlcp, Offsets};
 use super::solver::{pgs, Lcp, Pgs, PgsInfo, PgsParams, PgsProblem};
 use super::state::State;
@@ -84,12 +83,7 @@ pub fn solve(
         };
     }
     let gain = m.kinetic_change_rows(&m.lambda, step.nu_free, nu);
-    let quick = round_off(step.nu_free);
-    let allowance = if gain <= quick {
-        quick
-    } else {
-        cheap_allowance(m, step.nu_free, p, step.minv)
-    };
+    let allowance = allowance(m, gain, step);
     // NOTE: the trigger is the energy alone, not convergence: PGS stops at
     // its cap on a jointed chain in contact for want of sweeps, not of a
     // solution (joints.toml: 21 of 1000 steps), and relaxing those steps
@@ -122,8 +116,7 @@ pub fn solve(
     // (as in `fallback::solve`; an unconverged relaxed answer still gives
     // the impulses' scale).
     let relaxed_gain = m.kinetic_change_rows(&m.lambda, step.nu_free, nu);
-    let work = m.offset_work(&scratch.full_offset);
-    let bound = relaxed_gain.max(0.0) + BUDGET_FACTOR * work + allowance;
+    let bound = explained(relaxed_gain, m.offset_work(&scratch.full_offset), allowance);
     if gain <= bound {
         restore_rigid(m, step, nu, scratch);
         return Solved {
@@ -212,7 +205,6 @@ fn run(
     step: Step,
     nu: &mut Vec<f64>,
 ) -> PgsInfo {
-    let minv: &[InvMass] = step.minv;
     let problem = PgsProblem {
         rows: &m.rows,
         offset,
@@ -222,7 +214,7 @@ fn run(
         nd: m.nd,
         friction_of: &m.friction_of,
         mu: &m.mu,
-        minv,
+        minv: step.minv,
         nu_free: step.nu_free,
         lcp: Lcp {
             n: m.lcp_size(),

@@ -481,6 +481,12 @@ impl Engine {
             {
                 let _span = tracing::trace_span!("solve").entered();
                 let m = &mut ws.mlcp;
+                let step = fallback::Step {
+                    nu_free: &ws.nu_free,
+                    contacts: &ws.contacts,
+                    params: p,
+                    minv: &ws.minv,
+                };
                 let n = m.lcp_size();
                 m.z.clear();
                 m.z.resize(n, 0.0);
@@ -521,27 +527,18 @@ impl Engine {
                         &mut self.lemke,
                         m,
                         guessed,
-                        fallback::Step {
-                            nu_free: &ws.nu_free,
-                            contacts: &ws.contacts,
-                            params: p,
-                            minv: &ws.minv,
-                        },
+                        step,
                         &mut ws.nu,
                         &mut ws.fallback,
                     );
                     match solved {
                         Ok(s) => {
-                            relaxed = s.fallback.is_some();
+                            relaxed = report.took(s.fallback, s.energy_refused, s.allowance);
                             let info = s.info;
                             report.pivots += info.work;
                             report.regularized += usize::from(info.regularized());
                             report.refined += usize::from(info.refined);
                             report.rung = report.rung.max_by_ladder(info.rung);
-                            report.fallback = Fallback::max(report.fallback, s.fallback);
-                            report.energy_refused |= s.energy_refused;
-                            // The last solve's answer is the step's.
-                            report.energy_allowance = s.allowance;
                             report.residual = report.residual.max(info.residual);
                         }
                         // auto: the fallback the step report names.
@@ -562,22 +559,14 @@ impl Engine {
                         &self.pgs_params,
                         m,
                         &self.state,
-                        fallback::Step {
-                            nu_free: &ws.nu_free,
-                            contacts: &ws.contacts,
-                            params: p,
-                            minv: &ws.minv,
-                        },
+                        step,
                         &mut ws.nu,
                         &mut ws.iterative,
                     );
+                    relaxed = report.took(solved.fallback, solved.energy_refused, solved.allowance);
                     report.pivots += solved.info.iterations;
                     report.residual = report.residual.max(solved.info.residual);
                     report.not_converged |= !solved.info.converged;
-                    report.fallback = Fallback::max(report.fallback, solved.fallback);
-                    report.energy_refused |= solved.energy_refused;
-                    report.energy_allowance = solved.allowance;
-                    relaxed = solved.fallback.is_some();
                 }
             }
             timings.solve += lap.lap();

@@ -122,13 +122,13 @@ pub struct StepReport {
     /// solution Lemke finds (see `engine::fallback`); `None`: rigid.
     pub fallback: Option<Fallback>,
     /// A rigid answer was found but gave more kinetic energy than the
-    /// stabilisation may (`fallback::energy_plausible`), so the step fell
-    /// back.
+    /// stabilisation may (`fallback::allowance`, `fallback::explained`),
+    /// so the step fell back.
     pub energy_refused: bool,
     /// The kinetic energy over the free motion's that the step's answer
     /// was allowed by the energy check (J; `fallback::Solved::allowance`):
-    /// what the stabilisation may have given. Zero for a fallback and for
-    /// the iterative solver (not checked).
+    /// what the stabilisation may have given. Zero for a fallback;
+    /// infinite with `Params::fallback` off (not checked).
     pub energy_allowance: f64,
     /// Contacts that started the step deeper than `project::PENETRATION_SLOP`
     /// and were projected out (positions moved, velocities kept).
@@ -143,6 +143,20 @@ pub struct StepReport {
 }
 
 impl StepReport {
+    /// Records a solve's formulation and energy check (the last solve's
+    /// answer is the step's); true when it fell back.
+    pub fn took(
+        &mut self,
+        fallback: Option<Fallback>,
+        energy_refused: bool,
+        allowance: f64,
+    ) -> bool {
+        self.fallback = Fallback::max(self.fallback, fallback);
+        self.energy_refused |= energy_refused;
+        self.energy_allowance = allowance;
+        fallback.is_some()
+    }
+
     pub fn ok(&self) -> bool {
         self.error.is_none()
     }
@@ -192,6 +206,18 @@ impl LadderCounts {
             None => {}
         }
         self.energy_refused += u64::from(r.energy_refused);
+    }
+
+    /// Adds another run's counts (a suite of runs).
+    pub fn merge(&mut self, other: &LadderCounts) {
+        for (a, b) in self.rungs.iter_mut().zip(other.rungs) {
+            *a += b;
+        }
+        self.refined += other.refined;
+        self.relaxed += other.relaxed;
+        self.compliant += other.compliant;
+        self.max_compliance = self.max_compliance.max(other.max_compliance);
+        self.energy_refused += other.energy_refused;
     }
 
     /// Steps that did not solve the rigid LCP of formulation.md.

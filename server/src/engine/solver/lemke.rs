@@ -247,16 +247,6 @@ impl Lemke {
     /// Lemke on `M + shift I` with pivot tolerance `pivot_tol`, its answer
     /// refined when it is not at round-off, and verified against `M, q`
     /// to the relative residual `tol` (the rung is left for the caller).
-    pub fn solve_shifted(
-        &mut self,
-        lcp: &Lcp,
-        z: &mut [f64],
-        shift: f64,
-        pivot_tol: f64,
-    ) -> Result<SolveInfo, LemkeError> {
-        self.run(lcp, z, shift, pivot_tol, VERIFY_TOL)
-    }
-
     fn run(
         &mut self,
         lcp: &Lcp,
