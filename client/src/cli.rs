@@ -273,6 +273,13 @@ pub fn record(
             Ok(f) => f,
             Err(ClientError::Timeout { .. }) => continue,
             Err(ClientError::Interrupted) => break,
+            // What was recorded stays: the files end at the last frame.
+            Err(ClientError::ServerGone { name }) => {
+                eprintln!(
+                    "warning: the server '{name}' is gone; the recording ends at frame {count}"
+                );
+                break;
+            }
             Err(e) => return Err(e.into()),
         };
         if let Some(s) = last_seq {

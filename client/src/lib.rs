@@ -70,7 +70,15 @@ pub enum ClientError {
     Shutdown,
     /// SIGINT or SIGTERM arrived while waiting.
     Interrupted,
+    /// The server went away without a shutdown frame: killed, or its
+    /// process ended (told within [`SERVER_CHECK`] of a wait).
+    ServerGone { name: String },
 }
+
+/// How often a wait checks that the server is still there (a read of its
+/// ports and, if they are left, of its node's liveness): a killed server is
+/// told as [`ClientError::ServerGone`] within this, not at the timeout.
+pub const SERVER_CHECK: Duration = Duration::from_millis(100);
 
 impl fmt::Display for ClientError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -88,6 +96,10 @@ impl fmt::Display for ClientError {
             }
             ClientError::Shutdown => write!(f, "the server shut down"),
             ClientError::Interrupted => write!(f, "interrupted"),
+            ClientError::ServerGone { name } => write!(
+                f,
+                "the server '{name}' is gone (killed, or it ended without a shutdown frame)"
+            ),
         }
     }
 }
@@ -149,6 +161,13 @@ fn service_name(s: &str) -> Result<ServiceName, ClientError> {
 pub struct Connection {
     name: String,
     node: Node<ipc::Service>,
+    control_service: iceoryx2::service::port_factory::request_response::PortFactory<
+        ipc::Service,
+        ControlRequest,
+        (),
+        ControlResponse,
+        (),
+    >,
     control: RrClient<ipc::Service, ControlRequest, (), ControlResponse, ()>,
     wake: Notifier<ipc::Service>,
 }
@@ -163,12 +182,12 @@ impl Connection {
         let node = NodeBuilder::new()
             .create::<ipc::Service>()
             .map_err(|e| ipc("cannot create an iceoryx2 node")(&e))?;
-        let control = node
+        let control_service = node
             .service_builder(&service_name(&services::control(name))?)
             .request_response::<ControlRequest, ControlResponse>()
             .open()
             .map_err(|e| missing(name, &services::control(name), e))?;
-        let control = control
+        let control = control_service
             .client_builder()
             .create()
             .map_err(|e| ipc("cannot create a control client")(&e))?;
@@ -183,6 +202,7 @@ impl Connection {
         Ok(Connection {
             name: name.into(),
             node,
+            control_service,
             control,
             wake,
         })
@@ -194,6 +214,24 @@ impl Connection {
 
     pub fn node(&self) -> &Node<ipc::Service> {
         &self.node
+    }
+
+    /// Whether a live server holds the control service.
+    pub fn server_alive(&self) -> bool {
+        let mut nodes = [0u128; 1];
+        let mut n = 0;
+        self.control_service.dynamic_config().list_servers(|d| {
+            nodes[0] = d.node_id.value();
+            n = 1;
+            CallbackProgression::Stop
+        });
+        n == 1 && node_alive(nodes[0]) != Some(false)
+    }
+
+    fn gone(&self) -> ClientError {
+        ClientError::ServerGone {
+            name: self.name.clone(),
+        }
     }
 
     /// Sends one request and waits for its answer; an error status becomes
@@ -226,7 +264,11 @@ impl Connection {
             .map_err(|e| ipc("cannot send a control request")(&e))?;
         // Waking the server is an optimisation: it also polls.
         let _ = self.wake.notify();
+        if pending.number_of_server_connections() == 0 {
+            return Err(self.gone());
+        }
         let start = Instant::now();
+        let mut next_check = start + SERVER_CHECK;
         loop {
             while let Some(r) = pending
                 .receive()
@@ -248,6 +290,17 @@ impl Connection {
                     what,
                     after: timeout,
                 });
+            }
+            // The server let the request go unanswered (it ended), or it
+            // was killed with the request in its queue.
+            if !pending.is_connected() {
+                return Err(self.gone());
+            }
+            if Instant::now() >= next_check {
+                next_check += SERVER_CHECK;
+                if !self.server_alive() {
+                    return Err(self.gone());
+                }
             }
             if self.node.wait(Duration::from_micros(50)).is_err() {
                 return Err(ClientError::Interrupted);
@@ -284,17 +337,30 @@ impl Connection {
     pub fn shutdown(&self) -> Result<ControlResponse, ClientError> {
         self.command(CMD_SHUTDOWN)
     }
-    /// The scene as the server runs it (TOML), streamed in chunks.
+    /// The scene as the server runs it (TOML), streamed in chunks of
+    /// `MESSAGE_LEN` bytes, `SCENE_CHUNKS_PER_REQUEST` per request.
     pub fn scene_toml(&self) -> Result<String, ClientError> {
-        let req = ControlRequest {
-            command: CMD_SCENE,
-            ..Default::default()
-        };
         let mut bytes = Vec::new();
-        let bytes = self.exchange(req, CONTROL_TIMEOUT, "scene from the server", |r| {
-            bytes.extend_from_slice(r.message_bytes());
-            (bytes.len() >= r.value as usize).then(|| std::mem::take(&mut bytes))
-        })?;
+        loop {
+            let req = ControlRequest {
+                command: CMD_SCENE,
+                count: bytes.len() as u64,
+                ..Default::default()
+            };
+            let mut chunks = 0;
+            let total = self.exchange(req, CONTROL_TIMEOUT, "scene from the server", |r| {
+                // Chunks are cut at byte boundaries (a UTF-8 character may
+                // span two): join the bytes, then decode.
+                let total = r.value as usize;
+                let take = total.saturating_sub(bytes.len()).min(MESSAGE_LEN);
+                bytes.extend_from_slice(&r.message[..take]);
+                chunks += 1;
+                (bytes.len() >= total || chunks == SCENE_CHUNKS_PER_REQUEST).then_some(total)
+            })?;
+            if bytes.len() >= total {
+                break;
+            }
+        }
         String::from_utf8(bytes).map_err(|e| ClientError::Ipc {
             what: "the scene is not UTF-8".into(),
             detail: e.to_string(),
@@ -326,6 +392,12 @@ impl Connection {
 
 /// The state subscription with its wake-up event.
 struct StateReader {
+    name: String,
+    service: iceoryx2::service::port_factory::publish_subscribe::PortFactory<
+        ipc::Service,
+        StateFrame,
+        (),
+    >,
     sub: Subscriber<ipc::Service, StateFrame, ()>,
     /// None for a polling reader: the server's event then has one listener
     /// less to notify every step.
@@ -339,11 +411,12 @@ impl StateReader {
         buffer: usize,
         wake: bool,
     ) -> Result<Self, ClientError> {
-        let sub = node
+        let service = node
             .service_builder(&service_name(&services::state(name))?)
             .publish_subscribe::<StateFrame>()
             .open()
-            .map_err(|e| missing(name, &services::state(name), e))?
+            .map_err(|e| missing(name, &services::state(name), e))?;
+        let sub = service
             .subscriber_builder()
             .buffer_size(buffer)
             .create()
@@ -361,7 +434,24 @@ impl StateReader {
         } else {
             None
         };
-        Ok(StateReader { sub, ready })
+        Ok(StateReader {
+            name: name.into(),
+            service,
+            sub,
+            ready,
+        })
+    }
+
+    /// Whether the state has a publisher whose node lives: a server that
+    /// ends removes its publisher; a killed one leaves it behind a dead
+    /// node.
+    fn server_alive(&self) -> bool {
+        let mut node = None;
+        self.service.dynamic_config().list_publishers(|p| {
+            node = Some(p.node_id.value());
+            CallbackProgression::Stop
+        });
+        node.is_some_and(|n| node_alive(n) != Some(false))
     }
 
     /// The newest frame in the buffer, if any (older ones are dropped
@@ -428,6 +518,7 @@ impl StateReader {
             WaitMode::Hybrid => HYBRID_SPIN.min(timeout),
         };
         let mut spins = 0u32;
+        let mut next_check = SERVER_CHECK;
         loop {
             if let Some(sample) = self.receive(newest)? {
                 if accept(sample.payload()) {
@@ -442,6 +533,15 @@ impl StateReader {
                     what: "state frame",
                     after: timeout,
                 });
+            }
+            if elapsed >= next_check {
+                next_check += SERVER_CHECK;
+                // Frames the server sent before it went are read first.
+                if !self.server_alive() && !self.sub.has_samples().unwrap_or(false) {
+                    return Err(ClientError::ServerGone {
+                        name: self.name.clone(),
+                    });
+                }
             }
             if elapsed < spin_for {
                 spins = spins.wrapping_add(1);
@@ -498,6 +598,8 @@ pub struct Controller {
     info: ControlResponse,
     /// What earlier inputs left in the input publisher's samples.
     written: Written,
+    /// `leave` was called (a drop then sends no second one).
+    left: bool,
 }
 
 impl Controller {
@@ -540,6 +642,7 @@ impl Controller {
             sequence: 0,
             info,
             written: Written::default(),
+            left: false,
         })
     }
 
@@ -572,6 +675,7 @@ impl Controller {
     /// Only the entries in use are read from shared memory.
     pub fn next_state_ref(&mut self, timeout: Duration) -> Result<&StateFrame, ClientError> {
         let answered = self.answered;
+        let id = self.id;
         let Controller {
             reader,
             conn,
@@ -585,9 +689,14 @@ impl Controller {
             *wait,
             timeout,
             true,
+            // A frame that does not list this controller was published
+            // before the join took effect (it may still sit in the buffer):
+            // the server does not wait for this controller's answer to it.
             |f| {
                 f.status & STATUS_SHUTDOWN != 0
-                    || (f.status & STATUS_WAITING == 0 && Some(f.step) != answered)
+                    || (f.status & STATUS_WAITING == 0
+                        && Some(f.step) != answered
+                        && f.controller(id).is_some())
             },
             |f| last.write_used(f, last_written),
         )?;
@@ -623,7 +732,13 @@ impl Controller {
     }
 
     /// Leaves the lockstep; the server removes this controller's torques.
-    pub fn leave(self) -> Result<(), ClientError> {
+    /// A controller dropped without it leaves too (issue 15, defect 5).
+    pub fn leave(mut self) -> Result<(), ClientError> {
+        self.left = true;
+        self.request_leave(CONTROL_TIMEOUT)
+    }
+
+    fn request_leave(&self, timeout: Duration) -> Result<(), ClientError> {
         self.conn
             .request(
                 ControlRequest {
@@ -631,9 +746,24 @@ impl Controller {
                     controller_id: self.id,
                     ..Default::default()
                 },
-                CONTROL_TIMEOUT,
+                timeout,
             )
             .map(|_| ())
+    }
+}
+
+/// How long a dropped controller waits for the server to take its leave:
+/// the server answers between steps, and a server that is gone must not
+/// hold up the drop for long.
+const LEAVE_ON_DROP: Duration = Duration::from_millis(500);
+
+impl Drop for Controller {
+    fn drop(&mut self) {
+        if !self.left {
+            // A server that is gone or already let this controller go
+            // has nothing to answer: the error changes nothing here.
+            let _ = self.request_leave(LEAVE_ON_DROP);
+        }
     }
 }
 

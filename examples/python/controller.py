@@ -11,6 +11,7 @@ arm at a target elevation (gravity compensated), then leaves.
 """
 
 import argparse
+import atexit
 import ctypes
 import math
 import os
@@ -25,6 +26,7 @@ VERSION = 1
 CMD_JOIN, CMD_LEAVE = 1, 2
 ROLE_CONTROLLER = 1
 STATUS_SHUTDOWN, STATUS_WAITING = 16, 32
+SLOT_JOINED = 1
 
 
 class BodyFrame(ctypes.Structure):
@@ -196,8 +198,29 @@ class Client:
             .create()
         )
         self.id = 0
+        self.joined = False
 
-    def request(self, command: int, **fields) -> ControlResponse:
+    def join(self) -> "ControlResponse":
+        """Joins the lockstep; the controller leaves again at interpreter exit
+        if it has not left (the server also notices a process that is gone,
+        within about 10 ms, but a leave is immediate and logged as one)."""
+        joined = self.request(CMD_JOIN, role=ROLE_CONTROLLER)
+        self.id = joined.controller_id
+        self.joined = True
+        atexit.register(self.leave)
+        return joined
+
+    def leave(self):
+        """Leaves the lockstep once; a server that is gone is not an error."""
+        if not self.joined:
+            return
+        self.joined = False
+        try:
+            self.request(CMD_LEAVE, controller_id=self.id, timeout=0.5)
+        except (RuntimeError, TimeoutError):
+            pass
+
+    def request(self, command: int, timeout: float = 5.0, **fields) -> ControlResponse:
         node_id = self.node.id.value
         req = ControlRequest(
             version=VERSION,
@@ -209,7 +232,7 @@ class Client:
         )
         pending = self.control.send_copy(req)
         self.wake.notify()
-        deadline = time.monotonic() + 5.0
+        deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             response = pending.receive()
             if response is not None:
@@ -234,7 +257,12 @@ class Client:
             if newest is not None:
                 if newest.status & STATUS_SHUTDOWN:
                     return newest
-                if not newest.status & STATUS_WAITING and newest.step != answered:
+                # A frame that does not list this controller predates the
+                # join (protocol.md, Lockstep 2): the server waits for no
+                # answer to it.
+                listed = any(s.id == self.id and s.flags & SLOT_JOINED
+                             for s in newest.controllers[:newest.controller_count])
+                if not newest.status & STATUS_WAITING and newest.step != answered and listed:
                     return newest
             left = deadline - time.monotonic()
             if left <= 0:
@@ -280,12 +308,14 @@ def main() -> int:
     p.add_argument("--name", default="default")
     p.add_argument("--steps", type=int, default=1000)
     p.add_argument("--elevation", type=float, default=10.0)
+    p.add_argument("--exit-without-leave", type=int, metavar="N",
+                   help="answer N steps, then end the process at once, skipping "
+                        "leave and every cleanup (as a crashed controller would)")
     args = p.parse_args()
     iox2.set_log_level(iox2.LogLevel.Error)
 
     client = Client(args.name)
-    joined = client.request(CMD_JOIN, role=ROLE_CONTROLLER)
-    client.id = joined.controller_id
+    joined = client.join()
     print(f"joined '{args.name}' as controller {client.id}: "
           f"{joined.body_count} bodies, {joined.joint_count} joints, dt {joined.dt}")
     answered, elevation, sent, shutdown = None, float("nan"), 0, False
@@ -303,8 +333,11 @@ def main() -> int:
         client.send(out)
         answered = frame.step
         sent += 1
+        if sent == args.exit_without_leave:
+            print(f"answered {sent} steps; exiting without leave", flush=True)
+            os._exit(0)
     if not shutdown:
-        client.request(CMD_LEAVE, controller_id=client.id)
+        client.leave()
     print(f"{'server shut down; ' if shutdown else ''}answered {sent} steps; elevation {elevation:.3f} deg (target {args.elevation})")
     return 0
 

@@ -358,6 +358,12 @@ fn bad_inputs_are_rejected_by_reason_and_the_run_goes_on() {
     let log = std::fs::read_to_string(dir.path().join("inputs.csv")).unwrap();
     assert!(log.contains(",non_finite,"));
     assert!(log.contains(",wrong_step,"));
+    // A rejected input keeps the values sent (issue 15, point 11).
+    assert!(log.contains(",non_finite,torque,0,NaN,0,0,,,"), "{log}");
+    assert!(log.contains(",unknown_index,torque,7,0,0,0,,,"), "{log}");
+    assert!(log.contains(",non_finite,impulse,0,0,0,inf,0,0,0"), "{log}");
+    assert!(log.contains(",duplicate,torque,1,0.1,0,0,,,"), "{log}");
+    assert!(log.contains(",duplicate,torque,1,0.2,0,0,,,"), "{log}");
     // The rejected steps ran with the policy's input (hold: the last
     // torque, which is the scene's own -0.1 here): the trajectory is the
     // offline one with that torque throughout.
@@ -397,9 +403,10 @@ fn a_killed_controller_is_dropped_the_run_goes_on_and_another_can_join() {
     };
     let f = step_of(100);
     assert_eq!(f.controller_count, 1);
-    drop(controller); // SIGKILL: no goodbye
-                      // Detected at the deadline by iceoryx2's node list (dead), long before
-                      // the 50 misses of --drop-after.
+    // SIGKILL: no goodbye. Noticed by iceoryx2's node list (dead) while
+    // the server waits, before the deadline (300 ms) and long before the
+    // 50 misses of --drop-after.
+    drop(controller);
     let start = Instant::now();
     loop {
         let f = monitor.next(Duration::from_secs(10)).expect("frame");
@@ -421,11 +428,12 @@ fn a_killed_controller_is_dropped_the_run_goes_on_and_another_can_join() {
     Connection::connect(&name).unwrap().shutdown().unwrap();
     let (status, stderr) = server.finish();
     assert!(status.success(), "{stderr}");
-    assert!(stderr.contains("died"), "{stderr}");
+    assert!(stderr.contains("exited without leaving"), "{stderr}");
     let s = summary(dir.path());
     assert_eq!(s["controllers_joined"], 2);
     assert_eq!(s["controllers_dropped"], 1);
-    assert!(s["deadline_misses"].as_u64().unwrap() >= 1);
+    assert_eq!(s["controllers_departed"], 1);
+    assert_eq!(s["deadline_misses"], 0);
     assert_eq!(s["failures"], 0);
 }
 
@@ -633,6 +641,32 @@ fn a_killed_server_leaves_nothing_that_blocks_its_name() {
     assert!(status.success(), "{stderr}");
 }
 
+/// Issue 15, defect 2: a killed server's services live on while a client
+/// of it is attached; the next server of that name takes them over instead
+/// of being refused as "already running".
+#[test]
+fn a_killed_servers_name_is_free_while_its_old_clients_live() {
+    let (mut first, dir, name) = serve_test("stale-clients", &[]);
+    let old_pid = first.child.as_ref().unwrap().id();
+    let conn = Connection::connect(&name).expect("connect");
+    let monitor = Monitor::open(&name, 4).expect("monitor");
+    assert_eq!(conn.info().unwrap().pid, u64::from(old_pid));
+    let mut child = first.child.take().unwrap();
+    child.kill().unwrap(); // SIGKILL: the clients above stay attached
+    child.wait().unwrap();
+    let second = ServerProc::start(&name, dir.path(), &[]);
+    let new_pid = u64::from(second.child.as_ref().unwrap().id());
+    // The old clients talk to the new server on the same services.
+    assert_eq!(conn.info().expect("info from the new server").pid, new_pid);
+    monitor
+        .next(Duration::from_secs(10))
+        .expect("a frame of the new server");
+    conn.shutdown().expect("shutdown");
+    let (status, stderr) = second.finish();
+    assert!(status.success(), "{stderr}");
+    assert!(!stderr.contains("already running"), "{stderr}");
+}
+
 #[test]
 fn sigint_and_sigterm_shut_down_cleanly_and_leave_no_services() {
     for signal in ["-INT", "-TERM"] {
@@ -694,20 +728,27 @@ fn the_demo_holds_the_pendulum_at_its_target() {
     let _ = STATUS_SHUTDOWN;
 }
 
-/// The Python controller of examples/python, written from docs/protocol.md
-/// with the official iceoryx2 package (.ci/run installs it).
-#[test]
-fn the_python_controller_joins_and_answers_every_step() {
-    let (server, dir, name) = serve_test("python", &["--controllers", "1", "--steps", "1000"]);
+/// Runs the Python controller of examples/python with `args`; its stdout
+/// and stderr, after asserting that it succeeded.
+fn python_controller(args: &[&str]) -> String {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/python/controller.py");
     let out = Command::new("python3")
         .arg(&script)
-        .args(["--name", &name, "--steps", "100000"])
+        .args(args)
         .output()
         .expect("run python3");
     let text =
         String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{text}");
+    text
+}
+
+/// The Python controller of examples/python, written from docs/protocol.md
+/// with the official iceoryx2 package (.ci/run installs it).
+#[test]
+fn the_python_controller_joins_and_answers_every_step() {
+    let (server, dir, name) = serve_test("python", &["--controllers", "1", "--steps", "1000"]);
+    let text = python_controller(&["--name", &name, "--steps", "100000"]);
     // Steps 0..=999 are answered; state 1000 comes with the shutdown frame
     // right behind it, so it may be read or skipped.
     assert!(
@@ -1193,4 +1234,248 @@ fn a_second_answer_is_a_duplicate_whenever_it_is_read() {
     // The last step's second answer may come after the run ended.
     let late = r.get("after_end").and_then(|v| v.as_u64()).unwrap_or(0);
     assert_eq!(r["duplicate"].as_u64().unwrap() + late, 30, "{s}");
+}
+
+/// Issue 15, defect 4: an input is taken only from the publisher of the
+/// process that joined as its controller. A process that never joined
+/// sends as controller 1 before each of controller 1's own answers: every
+/// one of its inputs is rejected as `foreign_sender`, and the trajectory is
+/// the one of controller 1's torques alone (before the fix, about half of
+/// the intruder's inputs were applied).
+#[test]
+fn an_input_from_a_process_that_did_not_join_is_rejected() {
+    use iceoryx2::prelude::*;
+    let steps = 40u64;
+    let (server, dir, name) = serve_test(
+        "foreign",
+        &[
+            "--controllers",
+            "1",
+            "--steps",
+            &steps.to_string(),
+            "--deadline-ms",
+            "5000",
+        ],
+    );
+    // The intruder's publisher first: the server's subscriber reads the
+    // publishers in the order they connected, so its inputs come first.
+    let node = NodeBuilder::new().create::<ipc::Service>().unwrap();
+    let service: ServiceName = cosim_shared::wire::services::input(&name)
+        .as_str()
+        .try_into()
+        .unwrap();
+    let intruder = node
+        .service_builder(&service)
+        .publish_subscribe::<InputFrame>()
+        .open()
+        .unwrap()
+        .publisher_builder()
+        .create()
+        .unwrap();
+    let mut c = Controller::join(&name, WaitMode::Block).expect("join");
+    let mut sent = 0u64;
+    answer_until_shutdown(&mut c, |c| {
+        let step = c.last_state().unwrap().step;
+        let mut forged = InputFrame {
+            controller_id: c.id(),
+            step,
+            ..Default::default()
+        };
+        forged.push_torque(0, [0.0, 5.0, 0.0]);
+        intruder.send_copy(forged).unwrap();
+        sent += 1;
+        let mut own = InputFrame::default();
+        own.push_torque(0, [0.0, 0.2, 0.0]);
+        c.send(own).unwrap();
+    });
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    let s = summary(dir.path());
+    assert!(stderr.contains("did not join"), "{stderr} {s}");
+    assert_eq!(sent, steps);
+    assert_eq!(s["inputs_rejected"]["foreign_sender"], steps, "{s}");
+    assert_eq!(s["inputs_applied"], steps, "{s}");
+    assert_eq!(
+        positions(dir.path(), "upper"),
+        offline(steps, |_| Some([0.0, 0.2, 0.0]))
+    );
+    let log = std::fs::read_to_string(dir.path().join("inputs.csv")).unwrap();
+    assert_eq!(log.matches(",foreign_sender").count() as u64, steps);
+}
+
+/// Issue 15, defect 5: a controller process that ends without `leave`
+/// (here the Python controller with `os._exit`, which skips every
+/// cleanup) is noticed by its dead node while the server waits, and the
+/// run goes on at once: before the fix it waited the whole deadline (10 s
+/// here), counted a miss, and only then found the node dead.
+#[test]
+fn a_controller_that_exits_without_leaving_is_noticed_before_its_deadline() {
+    let (server, dir, name) = serve_test(
+        "exit-no-leave",
+        &[
+            "--controllers",
+            "1",
+            "--steps",
+            "300",
+            "--deadline-ms",
+            "10000",
+        ],
+    );
+    let text = python_controller(&["--name", &name, "--exit-without-leave", "50"]);
+    assert!(text.contains("exiting without leave"), "{text}");
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    assert!(
+        stderr.contains("exited without leaving at step 50"),
+        "{stderr}"
+    );
+    let s = summary(dir.path());
+    assert_eq!(s["deadline_misses"], 0, "{s}");
+    assert_eq!(s["controllers_departed"], 1, "{s}");
+    assert_eq!(s["controllers_dropped"], 1, "{s}");
+    assert_eq!(s["inputs_applied"], 50, "{s}");
+    assert_eq!(s["steps"], 300, "{s}");
+}
+
+/// Issue 15, defect 5: a Rust controller dropped without `leave` leaves.
+#[test]
+fn a_dropped_controller_leaves() {
+    let (server, dir, name) = serve_test(
+        "drop-leaves",
+        &[
+            "--controllers",
+            "1",
+            "--steps",
+            "100",
+            "--deadline-ms",
+            "10000",
+        ],
+    );
+    let mut c = Controller::join(&name, WaitMode::Block).expect("join");
+    for _ in 0..20 {
+        c.next_state(Duration::from_secs(10)).expect("state");
+        c.send(InputFrame::default()).expect("send");
+    }
+    drop(c);
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    // A leave, not a drop: the server was told, nothing was noticed late.
+    let s = summary(dir.path());
+    assert_eq!(s["deadline_misses"], 0, "{s}");
+    assert_eq!(s["controllers_dropped"], 0, "{s}");
+    assert_eq!(s["inputs_applied"], 20, "{s}");
+}
+
+/// Issue 15, point 11: a client waiting on a server that is killed gets
+/// `ServerGone` within `SERVER_CHECK`-ish time, not a timeout (30 s here).
+#[test]
+fn a_killed_servers_clients_are_told_it_is_gone() {
+    let (mut server, _dir, name) = serve_test("gone", &["--controllers", "1"]);
+    let mut c = Controller::join(&name, WaitMode::Block).expect("join");
+    c.next_state(Duration::from_secs(10)).expect("state");
+    c.send(InputFrame::default()).expect("send");
+    c.next_state(Duration::from_secs(10)).expect("state");
+    let conn = Connection::connect(&name).expect("connect");
+    let mut child = server.child.take().unwrap();
+    child.kill().unwrap(); // SIGKILL: its ports stay behind a dead node
+    child.wait().unwrap();
+    // The controller owes step 1's answer and waits for step 2's frame.
+    c.send(InputFrame::default()).expect("send");
+    match c.next_state(Duration::from_secs(30)) {
+        Err(ClientError::ServerGone { name: n }) => assert_eq!(n, name),
+        other => panic!("expected ServerGone, got {other:?}"),
+    }
+    match conn.info() {
+        Err(ClientError::ServerGone { .. }) => {}
+        other => panic!("expected ServerGone, got {other:?}"),
+    }
+}
+
+/// Issue 15, defect 10: a killed server leaves logs that end in a line cut
+/// off mid-write, and no summary.json. `replay` replays the complete steps
+/// and says where the log ends; `summarize` rebuilds a summary from the
+/// files. Before the fix, replay failed on the cut line.
+#[test]
+fn a_killed_servers_logs_replay_to_the_cut_and_summarize_rebuilds_a_summary() {
+    let (mut server, dir, name) = serve_test("killed-logs", &["--controllers", "1"]);
+    let mut c = Controller::join(&name, WaitMode::Hybrid).expect("join");
+    // Past two of the server's flushes (every 1000 steps).
+    for _ in 0..2500 {
+        let f = c.next_state(Duration::from_secs(10)).expect("state");
+        let mut input = InputFrame::default();
+        input.push_torque(0, [0.0, -0.2 * (f.step as f64 * 0.01).sin(), 0.0]);
+        c.send(input).expect("send");
+    }
+    let mut child = server.child.take().unwrap();
+    child.kill().unwrap();
+    child.wait().unwrap();
+    drop(c);
+    assert!(!dir.path().join("summary.json").exists());
+    // A kill during a write cuts a row anywhere; cut each log inside its
+    // last row so that the test does not depend on where the kill fell.
+    for file in ["replay.csv", "inputs.csv", "steps.csv"] {
+        let path = dir.path().join(file);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let cut = text.trim_end_matches('\n').len() - 5;
+        std::fs::write(&path, &text[..cut]).unwrap();
+    }
+    let (ok, text) = replay(dir.path());
+    assert!(ok, "{text}");
+    assert!(text.contains("every state identical"), "{text}");
+    assert!(text.contains("cut off at line"), "{text}");
+    assert!(text.contains("no summary.json"), "{text}");
+    let out = Command::new(EXE)
+        .arg("summarize")
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let s = summary(dir.path());
+    assert_eq!(s["rebuilt_from_files"], true, "{s}");
+    let steps = s["steps"].as_u64().unwrap();
+    assert!(steps >= 2000, "{s}");
+    assert!(s["replayable_steps"].as_u64().unwrap() >= 2000, "{s}");
+    assert!(s["inputs_applied"].as_u64().unwrap() >= 2000, "{s}");
+    assert_eq!(s["failures"], 0, "{s}");
+    assert!(s["files"]["replay.csv"]["cut_at_line"].is_u64(), "{s}");
+    // The rebuilt summary is never written over, nor a server's own.
+    let again = Command::new(EXE)
+        .arg("summarize")
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(!again.status.success());
+    assert!(String::from_utf8_lossy(&again.stderr).contains("exists"));
+}
+
+/// Issue 15 (protocol gaps): the scene stream was one request's responses,
+/// and a scene over 256 chunks (30,720 bytes) lost its tail in the
+/// client's response buffer. Now it comes in pages; chunks are cut at byte
+/// boundaries, so a two-byte character split between two chunks must come
+/// through whole.
+#[test]
+fn a_scene_larger_than_the_response_buffer_streams_whole() {
+    let dir = TempDir::new("big-scene");
+    let long = |c: &str| "é".repeat(12_000) + c;
+    let text = format!(
+        "[sim]\nname = \"big\"\ndt = 0.001\nduration = 1.0\n\n\
+         [[body]]\nname = \"{}\"\nradius = 0.1\nmass = 1.0\nposition = [0.0, 0.0, 1.0]\n\n\
+         [[body]]\nname = \"{}\"\nradius = 0.1\nmass = 1.0\nposition = [1.0, 0.0, 1.0]\n",
+        long("a"),
+        long("b")
+    );
+    let path = dir.path().join("big.toml");
+    std::fs::write(&path, &text).unwrap();
+    let name = unique("big-scene");
+    let out = dir.path().join("out");
+    let server = ServerProc::start(&name, &out, &[path.to_str().unwrap()]);
+    let conn = Connection::connect(&name).unwrap();
+    let got = conn.scene_toml().expect("the whole scene");
+    assert!(got.len() > 48_000, "{}", got.len());
+    let scene = cosim_shared::Scene::parse(&got, "<served>").expect("it parses");
+    assert_eq!(scene.bodies[0].name, long("a"));
+    assert_eq!(scene.bodies[1].name, long("b"));
+    conn.shutdown().unwrap();
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
 }

@@ -510,9 +510,12 @@ pub const REJECT_DUPLICATE: u32 = 8;
 pub const REJECT_UNKNOWN_CONTROLLER: u32 = 16;
 pub const REJECT_BAD_COUNT: u32 = 32;
 pub const REJECT_VERSION: u32 = 64;
+/// Sent with a joined controller's id by a publisher that is not the
+/// one of the process that joined (the server reads a sample's origin).
+pub const REJECT_FOREIGN_SENDER: u32 = 128;
 
 /// Every reason, with its name in logs and summaries.
-pub const REJECT_REASONS: [(u32, &str); 7] = [
+pub const REJECT_REASONS: [(u32, &str); 8] = [
     (REJECT_NON_FINITE, "non_finite"),
     (REJECT_UNKNOWN_INDEX, "unknown_index"),
     (REJECT_WRONG_STEP, "wrong_step"),
@@ -520,7 +523,14 @@ pub const REJECT_REASONS: [(u32, &str); 7] = [
     (REJECT_UNKNOWN_CONTROLLER, "unknown_controller"),
     (REJECT_BAD_COUNT, "bad_count"),
     (REJECT_VERSION, "version"),
+    (REJECT_FOREIGN_SENDER, "foreign_sender"),
 ];
+
+/// The chunks of the scene TOML (`MESSAGE_LEN` bytes each) the server
+/// sends for one `CMD_SCENE` request, from byte `count` on: fewer than the
+/// control service's response buffer (256), so that none is lost. A client
+/// asks again from where it got to until it has `value` bytes.
+pub const SCENE_CHUNKS_PER_REQUEST: usize = 200;
 
 /// `ControlRequest::command`.
 pub const CMD_JOIN: u32 = 1;

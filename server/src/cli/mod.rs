@@ -42,6 +42,10 @@ pub enum Command {
     /// Re-run a serve session from its folder and check every state bit for
     /// bit.
     Replay(serve::ReplayArgs),
+    /// Rebuild summary.json from the files of a serve run that ended
+    /// without writing one (a killed server): steps, failures, inputs by
+    /// reason, where each log ends.
+    Summarize(serve::SummarizeArgs),
     /// Benchmarks: `bench ipc` measures lockstep over iceoryx2 against a
     /// raw ping-pong and a TCP loopback baseline.
     Bench {
@@ -259,6 +263,7 @@ pub fn main() -> ExitCode {
         Command::Serve(args) => serve::serve(&args),
         Command::Demo(args) => serve::demo(&args),
         Command::Replay(args) => serve::replay(&args),
+        Command::Summarize(args) => serve::summarize(&args),
         Command::PdController(args) => serve::pd_controller(&args),
         Command::Bench {
             what: BenchWhat::Ipc { steps, quick, out },

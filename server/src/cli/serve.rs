@@ -88,6 +88,27 @@ pub struct ReplayArgs {
 }
 
 #[derive(clap::Args, Debug, Clone)]
+pub struct SummarizeArgs {
+    /// Output folder of a serve run that has no summary.json (killed).
+    pub dir: PathBuf,
+}
+
+/// `summarize DIR`: summary.json rebuilt from the files of a run that did
+/// not write one.
+pub fn summarize(args: &SummarizeArgs) -> ExitCode {
+    match crate::serve::summarize::summarize(&args.dir) {
+        Ok(path) => {
+            println!("summarize: wrote {}", path.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_BAD_INPUT)
+        }
+    }
+}
+
+#[derive(clap::Args, Debug, Clone)]
 pub struct PdArgs {
     #[arg(long, default_value = "default")]
     pub name: String,
@@ -364,8 +385,19 @@ pub fn pd_controller(args: &PdArgs) -> ExitCode {
 
 pub fn replay(args: &ReplayArgs) -> ExitCode {
     match run_replay(&args.dir) {
-        Ok(ReplayOutcome::Identical { steps }) => {
+        Ok(ReplayOutcome::Identical { steps, cut_at }) => {
             println!("replay: {steps} steps, every state identical to the bit");
+            if let Some(line) = cut_at {
+                println!(
+                    "replay: replay.csv ends in a line cut off at line {line} (the server was stopped while writing it); the log ends after step {steps} of the session"
+                );
+            }
+            if !args.dir.join("summary.json").exists() {
+                println!(
+                    "replay: no summary.json (the server did not end cleanly); `cosim-server summarize {}` rebuilds one from the files",
+                    args.dir.display()
+                );
+            }
             ExitCode::SUCCESS
         }
         Ok(ReplayOutcome::Differs {

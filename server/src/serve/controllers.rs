@@ -72,6 +72,9 @@ pub struct Slot {
     pub id: u32,
     /// Its iceoryx2 node, to tell dead from slow.
     pub node_id: u128,
+    /// The input publisher this slot takes inputs from: the first one of
+    /// its node that sent with its id (see [`owns`]).
+    pub publisher: Option<u128>,
     pub pid: u64,
     /// Torques this controller holds, by joint (None: never set).
     pub held: [Option<[f64; 3]>; MAX_JOINTS],
@@ -94,6 +97,7 @@ impl Slot {
         Slot {
             id,
             node_id,
+            publisher: None,
             pid,
             held: [None; MAX_JOINTS],
             impulses: Vec::with_capacity(MAX_BODIES),
@@ -185,6 +189,22 @@ pub fn check(
     Ok(())
 }
 
+/// Whether an input that publisher `origin` sent with this slot's id comes
+/// from the process that joined (issue 15, defect 4: inputs were taken on
+/// their `controller_id` alone). The slot is bound to the first publisher
+/// whose node (`node_of`, read from the input service's ports) is the one
+/// that joined; from then on only that publisher's inputs are its own.
+pub fn owns(slot: &mut Slot, origin: u128, node_of: impl FnOnce(u128) -> Option<u128>) -> bool {
+    match slot.publisher {
+        Some(p) => p == origin,
+        None if node_of(origin) == Some(slot.node_id) => {
+            slot.publisher = Some(origin);
+            true
+        }
+        None => false,
+    }
+}
+
 /// Takes a checked input into the slot.
 pub fn accept(input: &InputFrame, slot: &mut Slot, step: u64) {
     for t in &input.torques[..input.torque_count as usize] {
@@ -228,6 +248,21 @@ pub fn reason_name(bit: u32) -> &'static str {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_slot_takes_inputs_from_the_publisher_of_the_node_that_joined() {
+        let mut slot = Slot::new(1, 77, 0);
+        // A publisher of another node is refused and binds nothing.
+        assert!(!owns(&mut slot, 5, |_| Some(78)));
+        assert!(!owns(&mut slot, 5, |_| None));
+        assert_eq!(slot.publisher, None);
+        // The first publisher of node 77 binds the slot ...
+        assert!(owns(&mut slot, 6, |p| (p == 6).then_some(77)));
+        assert_eq!(slot.publisher, Some(6));
+        assert!(owns(&mut slot, 6, |_| unreachable!()));
+        // ... and a second one of the same node no longer matches.
+        assert!(!owns(&mut slot, 7, |_| Some(77)));
+    }
 
     const LIM: Limits = Limits {
         joints: 2,

@@ -72,11 +72,14 @@ impl Logs {
         }
     }
 
-    /// One input frame: a row per torque and impulse when taken, one row
-    /// naming the reason when rejected.
+    /// One input frame: a row per torque and impulse with `status` (
+    /// `applied`, or the reason it was rejected), so that a rejected input
+    /// keeps the values sent (issue 15: it kept only the reason). A frame
+    /// with neither gets one row without values; counts beyond the arrays
+    /// (a `bad_count` frame) are cut to them.
     pub fn input(&mut self, f: &InputFrame, status: &str) -> io::Result<()> {
         let head = format!("{},{},{},{status}", f.step, f.controller_id, f.sequence);
-        if status != "applied" {
+        if f.torque_count == 0 && f.impulse_count == 0 {
             return writeln!(self.inputs, "{head},,,,,,,,");
         }
         for t in &f.torques[..(f.torque_count as usize).min(f.torques.len())] {
@@ -136,8 +139,31 @@ pub enum Op {
     },
 }
 
-/// Reads `replay.csv`; errors name the line and the field.
-pub fn read_replay(text: &str, file: &str) -> Result<Vec<Op>, String> {
+/// The complete lines of a log that may have been cut off, and the number
+/// (1-based) of the line that was cut, if one was. Every row ends in a
+/// newline, so text after the last newline is a row the server was writing
+/// when it was killed (issue 15, defect 10): it is dropped, whatever it
+/// looks like (a hash cut short still parses as hex).
+pub fn complete_lines(text: &str) -> (&str, Option<usize>) {
+    if text.is_empty() || text.ends_with('\n') {
+        return (text, None);
+    }
+    let end = text.rfind('\n').map_or(0, |i| i + 1);
+    let complete = &text[..end];
+    (complete, Some(complete.lines().count() + 1))
+}
+
+/// `replay.csv` read: its ops, and the line that was cut off, if any.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReplayLog {
+    pub ops: Vec<Op>,
+    pub cut_at: Option<usize>,
+}
+
+/// Reads `replay.csv` up to its last complete line; errors name the line
+/// and the field.
+pub fn read_replay(text: &str, file: &str) -> Result<ReplayLog, String> {
+    let (text, cut_at) = complete_lines(text);
     let mut ops = Vec::new();
     for (k, line) in text.lines().enumerate().skip(1) {
         if line.trim().is_empty() {
@@ -188,5 +214,28 @@ pub fn read_replay(text: &str, file: &str) -> Result<Vec<Op>, String> {
         };
         ops.push(op);
     }
-    Ok(ops)
+    Ok(ReplayLog { ops, cut_at })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cut_last_line_is_dropped_and_named() {
+        assert_eq!(complete_lines(""), ("", None));
+        assert_eq!(complete_lines("h\na\n"), ("h\na\n", None));
+        assert_eq!(complete_lines("h\na\nste"), ("h\na\n", Some(3)));
+        assert_eq!(complete_lines("hea"), ("", Some(1)));
+        let text = format!("{REPLAY_HEADER}\nstep,0,,00000000000000ff\nstep,1,,00ab");
+        let log = read_replay(&text, "replay.csv").unwrap();
+        assert_eq!(
+            log.ops,
+            vec![Op::Step {
+                step: 0,
+                hash: 0xff
+            }]
+        );
+        assert_eq!(log.cut_at, Some(3));
+    }
 }

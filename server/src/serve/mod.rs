@@ -20,6 +20,7 @@ pub mod log;
 pub mod replay;
 pub mod services;
 pub mod stats;
+pub mod summarize;
 
 use crate::engine::{Engine, Model, State, StepReport};
 use crate::output::Writers;
@@ -60,6 +61,12 @@ pub struct ServeOptions {
     /// that compares windows of one run.
     pub timeline: bool,
 }
+
+/// How often a late controller is checked for having exited (its
+/// publisher gone or its node dead): short beside any deadline a user
+/// sets, long beside an answer in time (microseconds), so that the check
+/// (a read of the node list, tens of microseconds) costs nothing then.
+const DEPARTURE_CHECK: Duration = Duration::from_millis(10);
 
 /// Microseconds from `a` to `b`.
 fn us(a: Instant, b: Instant) -> f64 {
@@ -143,7 +150,12 @@ pub struct Counters {
     /// The solve ladder's counts, fallbacks included (`engine::fallback`).
     pub ladder: crate::engine::LadderCounts,
     pub controllers_joined: u64,
+    /// Dropped for any reason: dead, gone, or silent for `--drop-after`
+    /// deadlines.
     pub controllers_dropped: u64,
+    /// Of those, the ones that exited without `leave` and were noticed
+    /// before their deadline (`Server::drop_departed`).
+    pub controllers_departed: u64,
     pub inputs_applied: u64,
     pub inputs_rejected: BTreeMap<&'static str, u64>,
     pub deadline_misses: u64,
@@ -528,6 +540,10 @@ impl Server {
                 WaitMode::Block => Duration::ZERO,
                 WaitMode::Hybrid => cosim_client::HYBRID_SPIN,
             };
+        // A controller that is late is checked for having gone, first after
+        // DEPARTURE_CHECK and then every DEPARTURE_CHECK: an answer in time
+        // costs no check.
+        let mut next_check = published + DEPARTURE_CHECK;
         let mut polls = 0u32;
         let all_answered =
             |slots: &[controllers::Slot]| slots.iter().all(|s| s.answered == Some(k));
@@ -538,10 +554,10 @@ impl Server {
             // controller's core owns: about 0.2 us here).
             let mut done = all_answered(&self.slots);
             while !done {
-                let Some(input) = self.svc.receive_input()? else {
+                let Some((input, origin)) = self.svc.receive_input()? else {
                     break;
                 };
-                self.take_input(&input, k)?;
+                self.take_input(&input, origin, k)?;
                 done = all_answered(&self.slots);
             }
             if done {
@@ -564,14 +580,51 @@ impl Server {
             if now >= deadline {
                 break;
             }
+            if now >= next_check {
+                next_check = now + DEPARTURE_CHECK;
+                if self.drop_departed(k) {
+                    continue;
+                }
+            }
             if now < spin_until {
                 std::hint::spin_loop();
             } else {
-                self.svc
-                    .block((deadline - now).min(Duration::from_millis(50)))?;
+                self.svc.block((deadline.min(next_check)) - now)?;
             }
         }
         Ok((self.misses(k)?, Instant::now()))
+    }
+
+    /// Drops the controllers that owe step k and are gone: their input
+    /// publisher left the service (a process that ends normally removes its
+    /// ports) or their node is dead (a process killed or ended without
+    /// cleanup). Issue 15, defect 5: such a controller stalled the run for
+    /// the whole deadline and was counted as a miss. True if any went.
+    fn drop_departed(&mut self, k: u64) -> bool {
+        let svc = &self.svc;
+        let before = self.slots.len();
+        self.slots.retain(|s| {
+            if s.answered == Some(k) {
+                return true;
+            }
+            let gone = s.publisher.is_some_and(|p| !svc.publisher_connected(p))
+                || cosim_client::node_alive(s.node_id) == Some(false);
+            if gone {
+                tracing::warn!(
+                    "controller {} (pid {}) exited without leaving at step {k}; dropped",
+                    s.id,
+                    s.pid
+                );
+            }
+            !gone
+        });
+        let gone = before - self.slots.len();
+        if gone > 0 {
+            self.svc.node.try_cleanup_dead_nodes();
+            self.c.controllers_dropped += gone as u64;
+            self.c.controllers_departed += gone as u64;
+        }
+        gone > 0
     }
 
     /// The policy for the controllers that did not answer step k.
@@ -635,7 +688,7 @@ impl Server {
     /// Logs every input still queued as `after_end` (the run took no
     /// further step) and counts it under that reason.
     fn drain_inputs(&mut self) {
-        while let Ok(Some(input)) = self.svc.receive_input() {
+        while let Ok(Some((input, _))) = self.svc.receive_input() {
             *self.c.inputs_rejected.entry("after_end").or_default() += 1;
             if let Some(f) = self.files.as_mut() {
                 let _ = f.logs.input(&input, "after_end");
@@ -643,12 +696,35 @@ impl Server {
         }
     }
 
-    fn take_input(&mut self, input: &InputFrame, k: u64) -> Result<(), ServeError> {
+    fn take_input(&mut self, input: &InputFrame, origin: u128, k: u64) -> Result<(), ServeError> {
         let lim = controllers::Limits {
             joints: self.engine.model().joints.len(),
             bodies: self.engine.model().bodies.len(),
         };
         let idx = self.slots.iter().position(|s| s.id == input.controller_id);
+        if let Some(i) = idx {
+            let svc = &self.svc;
+            if input.version == PROTOCOL_VERSION
+                && !controllers::owns(&mut self.slots[i], origin, |p| svc.publisher_node(p))
+            {
+                // Counted and logged, but nothing of it reaches the slot:
+                // its owner's step is still open.
+                let name = controllers::reason_name(REJECT_FOREIGN_SENDER);
+                *self.c.inputs_rejected.entry(name).or_default() += 1;
+                if let Some(f) = self.files.as_mut() {
+                    f.logs.input(input, name)?;
+                }
+                let s = &mut self.slots[i];
+                if s.logged & REJECT_FOREIGN_SENDER == 0 {
+                    s.logged |= REJECT_FOREIGN_SENDER;
+                    tracing::warn!(
+                        "rejected an input sent as controller {} by a process that did not join as it ({name}); further ones are counted, not logged",
+                        input.controller_id
+                    );
+                }
+                return Ok(());
+            }
+        }
         match controllers::check(input, idx.map(|i| &self.slots[i]), k, lim) {
             Ok(()) => {
                 if let Some(i) = idx {
@@ -837,13 +913,29 @@ impl Server {
                     self.monitors.retain(|&m| m != r.controller_id);
                     self.respond(&req, ControlResponse::default());
                 }
+                CMD_LEAVE
+                    if self.slots.iter().any(|s| {
+                        s.id == r.controller_id
+                            && self.svc.request_node(&req).is_some_and(|n| n != s.node_id)
+                    }) =>
+                {
+                    // Only the process that joined leaves its slot.
+                    self.refuse(
+                        &req,
+                        RESP_UNKNOWN_CONTROLLER,
+                        &format!(
+                            "controller {} was joined by another process",
+                            r.controller_id
+                        ),
+                    );
+                }
                 CMD_LEAVE => {
                     // NOTE: inputs sent before the leave are in the buffer
                     // now; an answer to the coming step still applies to
                     // it, and the slot goes after that step.
                     let k = self.engine.state().step;
-                    while let Some(input) = self.svc.receive_input()? {
-                        self.take_input(&input, k)?;
+                    while let Some((input, origin)) = self.svc.receive_input()? {
+                        self.take_input(&input, origin, k)?;
                     }
                     let before = self.slots.len();
                     for s in &mut self.slots {
@@ -949,7 +1041,11 @@ impl Server {
         }
         let id = self.next_id;
         self.next_id += 1;
-        let node = u128::from(r.node_id_lo) | (u128::from(r.node_id_hi) << 64);
+        // The node is the one whose client port sent the request; what
+        // the request says is only a fallback (its inputs are bound to
+        // that node's publisher, see `controllers::owns`).
+        let claimed = u128::from(r.node_id_lo) | (u128::from(r.node_id_hi) << 64);
+        let node = self.svc.request_node(req).unwrap_or(claimed);
         self.slots.push(Slot::new(id, node, r.pid));
         self.c.controllers_joined += 1;
         tracing::info!("controller {id} (pid {}) joined", r.pid);
@@ -1023,9 +1119,29 @@ impl Server {
         }
     }
 
+    /// Up to `SCENE_CHUNKS_PER_REQUEST` chunks of the scene from byte
+    /// `count` on (issue 15: one request streamed all of it, and a scene
+    /// over 256 chunks, 30,720 bytes, lost its tail in the client's
+    /// response buffer).
     fn send_scene(&self, req: &Request) {
         let bytes = self.toml.as_bytes();
-        for chunk in bytes.chunks(MESSAGE_LEN) {
+        let from = usize::try_from(req.payload().count)
+            .unwrap_or(usize::MAX)
+            .min(bytes.len());
+        let chunks = bytes[from..]
+            .chunks(MESSAGE_LEN)
+            .take(SCENE_CHUNKS_PER_REQUEST);
+        if from == bytes.len() {
+            // Nothing left: one empty chunk still tells the length.
+            self.respond(
+                req,
+                ControlResponse {
+                    value: bytes.len() as u64,
+                    ..Default::default()
+                },
+            );
+        }
+        for chunk in chunks {
             let mut r = ControlResponse {
                 value: bytes.len() as u64,
                 ..Default::default()
@@ -1053,6 +1169,7 @@ impl Server {
             "fallback_steps": c.ladder.fell_back(),
             "controllers_joined": c.controllers_joined,
             "controllers_dropped": c.controllers_dropped,
+            "controllers_departed": c.controllers_departed,
             "inputs_applied": c.inputs_applied,
             "inputs_rejected": c.inputs_rejected,
             "deadline_misses": c.deadline_misses,

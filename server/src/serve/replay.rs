@@ -13,8 +13,10 @@ use std::path::Path;
 /// What a replay found.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ReplayOutcome {
-    /// Every step matched.
-    Identical { steps: u64 },
+    /// Every step matched; `cut_at` is the line of `replay.csv` that the
+    /// server was writing when it stopped (killed), if it left one: the
+    /// steps before it are the ones replayed.
+    Identical { steps: u64, cut_at: Option<usize> },
     /// The first step whose state differs: the `n`-th step of the session
     /// (1-based), taken from state `step`.
     Differs {
@@ -30,12 +32,12 @@ pub fn replay(dir: &Path) -> Result<ReplayOutcome, String> {
     let path = dir.join("replay.csv");
     let text = std::fs::read_to_string(&path)
         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let ops = read_replay(&text, &path.display().to_string())?;
+    let log = read_replay(&text, &path.display().to_string())?;
     let mut engine = Engine::new(Model::from_scene(&scene));
     let initial = engine.state().clone();
     let mut snapshots = Vec::new();
     let mut n = 0u64;
-    for op in ops {
+    for op in log.ops {
         match op {
             Op::Torque { joint, t, .. } => engine
                 .set_joint_torque(joint, Vector3::from(t))
@@ -83,5 +85,8 @@ pub fn replay(dir: &Path) -> Result<ReplayOutcome, String> {
             }
         }
     }
-    Ok(ReplayOutcome::Identical { steps: n })
+    Ok(ReplayOutcome::Identical {
+        steps: n,
+        cut_at: log.cut_at,
+    })
 }

@@ -13,6 +13,7 @@ use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::server::Server;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
+use iceoryx2::service::port_factory::server::ServerCreateError;
 use std::fmt;
 use std::time::Duration;
 
@@ -44,6 +45,15 @@ impl fmt::Display for ServiceError {
 }
 
 pub type Request = ActiveRequest<ipc::Service, ControlRequest, (), ControlResponse, ()>;
+type InputService =
+    iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, InputFrame, ()>;
+type ControlService = iceoryx2::service::port_factory::request_response::PortFactory<
+    ipc::Service,
+    ControlRequest,
+    (),
+    ControlResponse,
+    (),
+>;
 
 pub struct Services {
     pub node: Node<ipc::Service>,
@@ -52,6 +62,9 @@ pub struct Services {
     pub control: Server<ipc::Service, ControlRequest, (), ControlResponse, ()>,
     pub state_ready: Notifier<ipc::Service>,
     pub wake: Listener<ipc::Service>,
+    /// The services whose ports tell who sent an input or a request.
+    input_service: InputService,
+    control_service: ControlService,
     /// What earlier frames left in the state publisher's samples.
     written: Written,
 }
@@ -91,8 +104,11 @@ impl Services {
             );
         }
 
-        // The control service first: if it exists, a live server owns it.
-        let control = node
+        // The control service first. It outlives a killed server while any
+        // client of it is attached (issue 15, defect 2), so it is opened
+        // when it exists: a live server is one that still has its server
+        // port after the dead nodes' ports were removed above.
+        let control_service = node
             .service_builder(&name(&services::control(server))?)
             .request_response::<ControlRequest, ControlResponse>()
             .max_clients(services::MAX_CONTROL_CLIENTS)
@@ -100,25 +116,32 @@ impl Services {
             .max_active_requests_per_client(4)
             .max_response_buffer_size(256)
             .max_nodes(services::MAX_CONTROL_CLIENTS + 2)
-            .create();
-        let control = match control {
-            Ok(c) => c,
-            Err(iceoryx2::service::builder::request_response::RequestResponseCreateError::AlreadyExists) => {
-                let pid = cosim_client::Connection::connect(server)
-                    .and_then(|c| c.info())
-                    .ok()
-                    .map(|r| r.pid);
-                return Err(ServiceError::AlreadyRunning {
-                    name: server.into(),
-                    pid,
-                });
+            .open_or_create()
+            .map_err(|e| {
+                err(format!(
+                    "cannot open or create {}",
+                    services::control(server)
+                ))(&e)
+            })?;
+        let running = || {
+            let pid = cosim_client::Connection::connect(server)
+                .and_then(|c| c.info())
+                .ok()
+                .map(|r| r.pid);
+            ServiceError::AlreadyRunning {
+                name: server.into(),
+                pid,
             }
-            Err(e) => return Err(err(format!("cannot create {}", services::control(server)))(&e)),
         };
-        let control = control
-            .server_builder()
-            .create()
-            .map_err(|e| err("cannot create the control server".into())(&e))?;
+        if control_service.dynamic_config().number_of_servers() > 0 {
+            return Err(running());
+        }
+        // `max_servers(1)`: of two servers starting at once, one gets here.
+        let control = match control_service.server_builder().create() {
+            Ok(c) => c,
+            Err(ServerCreateError::ExceedsMaxSupportedServers) => return Err(running()),
+            Err(e) => return Err(err("cannot create the control server".into())(&e)),
+        };
 
         // NOTE: overflow stays enabled on the state: a reader that stops
         // reading loses old frames instead of blocking the server.
@@ -132,12 +155,12 @@ impl Services {
             .max_subscribers(services::MAX_STATE_SUBSCRIBERS)
             .max_publishers(1)
             .max_nodes(services::MAX_STATE_SUBSCRIBERS + 2)
-            .create()
+            .open_or_create()
             .map_err(|e| err(format!("cannot create {}", services::state(server)))(&e))?
             .publisher_builder()
             .create()
             .map_err(|e| err("cannot publish the state".into())(&e))?;
-        let input = node
+        let input_service = node
             .service_builder(&name(&services::input(server))?)
             .publish_subscribe::<InputFrame>()
             .enable_safe_overflow(true)
@@ -145,8 +168,9 @@ impl Services {
             .max_subscribers(2)
             .max_publishers(services::MAX_INPUT_PUBLISHERS)
             .max_nodes(services::MAX_INPUT_PUBLISHERS + 2)
-            .create()
-            .map_err(|e| err(format!("cannot create {}", services::input(server)))(&e))?
+            .open_or_create()
+            .map_err(|e| err(format!("cannot create {}", services::input(server)))(&e))?;
+        let input = input_service
             .subscriber_builder()
             .buffer_size(services::INPUT_BUFFER)
             .create()
@@ -157,7 +181,7 @@ impl Services {
                 .max_listeners(services::MAX_EVENT_PORTS)
                 .max_notifiers(services::MAX_EVENT_PORTS)
                 .max_nodes(services::MAX_EVENT_PORTS + 2)
-                .create()
+                .open_or_create()
                 .map_err(|e| err(format!("cannot create {s}"))(&e))
         };
         let state_ready = event(services::state_ready(server))?
@@ -175,6 +199,8 @@ impl Services {
             control,
             state_ready,
             wake,
+            input_service,
+            control_service,
             written: Written::default(),
         })
     }
@@ -191,13 +217,48 @@ impl Services {
         Ok(())
     }
 
-    /// The next input in the buffer.
-    pub fn receive_input(&self) -> Result<Option<InputFrame>, ServiceError> {
+    /// The next input in the buffer, with the id of the publisher that
+    /// sent it (iceoryx2 writes a sample's origin; a client cannot forge it).
+    pub fn receive_input(&self) -> Result<Option<(InputFrame, u128)>, ServiceError> {
         Ok(self
             .input
             .receive()
             .map_err(|e| err("cannot receive inputs".into())(&e))?
-            .map(|s| s.payload().used_copy()))
+            .map(|s| (s.payload().used_copy(), s.origin().value())))
+    }
+
+    /// The node of input publisher `publisher`, if it is connected.
+    pub fn publisher_node(&self, publisher: u128) -> Option<u128> {
+        let mut node = None;
+        self.input_service.dynamic_config().list_publishers(|p| {
+            if p.publisher_id.value() == publisher {
+                node = Some(p.node_id.value());
+                return CallbackProgression::Stop;
+            }
+            CallbackProgression::Continue
+        });
+        node
+    }
+
+    /// Whether input publisher `publisher` is still connected (a process
+    /// that ends normally removes its ports as it exits).
+    pub fn publisher_connected(&self, publisher: u128) -> bool {
+        self.publisher_node(publisher).is_some()
+    }
+
+    /// The node that sent control request `req`, read from the control
+    /// service's ports rather than from what the request claims.
+    pub fn request_node(&self, req: &Request) -> Option<u128> {
+        let client = req.origin();
+        let mut node = None;
+        self.control_service.dynamic_config().list_clients(|c| {
+            if c.client_id == client {
+                node = Some(c.node_id.value());
+                return CallbackProgression::Stop;
+            }
+            CallbackProgression::Continue
+        });
+        node
     }
 
     /// The next control request.
