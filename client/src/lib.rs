@@ -77,7 +77,8 @@ pub enum ClientError {
 
 /// How often a wait checks that the server is still there (a read of its
 /// ports and, if they are left, of its node's liveness): a killed server is
-/// told as [`ClientError::ServerGone`] within this, not at the timeout.
+/// told as [`ClientError::ServerGone`] after two such checks in a row, not
+/// at the timeout.
 pub const SERVER_CHECK: Duration = Duration::from_millis(100);
 
 impl fmt::Display for ClientError {
@@ -269,6 +270,7 @@ impl Connection {
         }
         let start = Instant::now();
         let mut next_check = start + SERVER_CHECK;
+        let mut gone = 0u32;
         loop {
             while let Some(r) = pending
                 .receive()
@@ -298,7 +300,9 @@ impl Connection {
             }
             if Instant::now() >= next_check {
                 next_check += SERVER_CHECK;
-                if !self.server_alive() {
+                // Two verdicts in a row, as in `StateReader::wait_with`.
+                gone = if self.server_alive() { 0 } else { gone + 1 };
+                if gone >= 2 {
                     return Err(self.gone());
                 }
             }
@@ -519,6 +523,9 @@ impl StateReader {
         };
         let mut spins = 0u32;
         let mut next_check = SERVER_CHECK;
+        // Two verdicts in a row: a node list read while other processes
+        // create and remove nodes can miss a live one once.
+        let mut gone = 0u32;
         loop {
             if let Some(sample) = self.receive(newest)? {
                 if accept(sample.payload()) {
@@ -537,10 +544,15 @@ impl StateReader {
             if elapsed >= next_check {
                 next_check += SERVER_CHECK;
                 // Frames the server sent before it went are read first.
-                if !self.server_alive() && !self.sub.has_samples().unwrap_or(false) {
-                    return Err(ClientError::ServerGone {
-                        name: self.name.clone(),
-                    });
+                if self.server_alive() || self.sub.has_samples().unwrap_or(false) {
+                    gone = 0;
+                } else {
+                    gone += 1;
+                    if gone >= 2 {
+                        return Err(ClientError::ServerGone {
+                            name: self.name.clone(),
+                        });
+                    }
                 }
             }
             if elapsed < spin_for {
@@ -589,6 +601,9 @@ pub struct Controller {
     /// The step answered last, so that a frame published again for the same
     /// step (after a join or a pause) is not answered twice.
     answered: Option<u64>,
+    /// The sequence of the frame answered last (a failed step's frame asks
+    /// again only if it is newer).
+    answered_sequence: u64,
     /// The last frame received (valid once `has_last`), written in place
     /// entry by entry (`last_written` marks what earlier frames left).
     last: Box<StateFrame>,
@@ -636,6 +651,7 @@ impl Controller {
             input,
             wait,
             answered: None,
+            answered_sequence: 0,
             last: Box::default(),
             has_last: false,
             last_written: Written::default(),
@@ -675,6 +691,7 @@ impl Controller {
     /// Only the entries in use are read from shared memory.
     pub fn next_state_ref(&mut self, timeout: Duration) -> Result<&StateFrame, ClientError> {
         let answered = self.answered;
+        let answered_sequence = self.answered_sequence;
         let id = self.id;
         let Controller {
             reader,
@@ -692,11 +709,18 @@ impl Controller {
             // A frame that does not list this controller was published
             // before the join took effect (it may still sit in the buffer):
             // the server does not wait for this controller's answer to it.
+            //
+            // A frame of a failed step asks for a new answer to the same
+            // step when its slot lacks SLOT_ANSWERED (protocol.md).
             |f| {
+                let Some(slot) = f.controller(id) else {
+                    return f.status & STATUS_SHUTDOWN != 0;
+                };
+                let again = f.status & STATUS_SOLVER_FAILED != 0
+                    && slot.flags & SLOT_ANSWERED == 0
+                    && f.sequence > answered_sequence;
                 f.status & STATUS_SHUTDOWN != 0
-                    || (f.status & STATUS_WAITING == 0
-                        && Some(f.step) != answered
-                        && f.controller(id).is_some())
+                    || (f.status & STATUS_WAITING == 0 && (Some(f.step) != answered || again))
             },
             |f| last.write_used(f, last_written),
         )?;
@@ -717,6 +741,7 @@ impl Controller {
         input.sequence = self.sequence;
         self.send_raw(&input)?;
         self.answered = Some(step);
+        self.answered_sequence = if self.has_last { self.last.sequence } else { 0 };
         Ok(())
     }
 

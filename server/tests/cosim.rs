@@ -716,16 +716,22 @@ fn the_demo_holds_the_pendulum_at_its_target() {
     let rows = positions(dir.path(), "upper");
     assert_eq!(rows.len(), 3001);
     for (step, x) in &rows[2000..] {
-        let r = [x[0], x[1], x[2] - 0.45];
-        let e = (r[2] / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt())
-            .asin()
-            .to_degrees();
+        let e = elevation_deg(*x);
         assert!((e - 15.0).abs() < 0.5, "step {step}: elevation {e}");
     }
     let s = summary(dir.path());
     assert_eq!(s["deadline_misses"], 0);
     assert_eq!(s["steps"], 3000);
     let _ = STATUS_SHUTDOWN;
+}
+
+/// The elevation (deg) of the upper sphere at `x` above the reference
+/// scene's shoulder at (0, 0, 0.45).
+fn elevation_deg(x: [f64; 3]) -> f64 {
+    let r = [x[0], x[1], x[2] - 0.45];
+    (r[2] / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt())
+        .asin()
+        .to_degrees()
 }
 
 /// Runs the Python controller of examples/python with `args`; its stdout
@@ -762,6 +768,22 @@ fn the_python_controller_joins_and_answers_every_step() {
     assert_eq!(s["inputs_applied"], 1000, "{s}");
     assert_eq!(s["inputs_rejected"], serde_json::json!({}));
     assert_eq!(s["deadline_misses"], 0);
+    // It read the frames right (it copies only the entries in use): the
+    // elevation it printed for its last frame is the one in states.csv.
+    let printed: f64 = text
+        .split("elevation ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("no elevation in {text}"));
+    let rows = positions(dir.path(), "upper");
+    assert!(
+        rows[999..]
+            .iter()
+            .any(|(_, x)| (elevation_deg(*x) - printed).abs() < 1e-3),
+        "printed {printed}, states.csv {:?}",
+        &rows[999..]
+    );
 }
 
 #[test]
@@ -1478,4 +1500,183 @@ fn a_scene_larger_than_the_response_buffer_streams_whole() {
     conn.shutdown().unwrap();
     let (status, stderr) = server.finish();
     assert!(status.success(), "{stderr}");
+}
+
+/// Issue 15, point 12: random control requests (every field random, sent
+/// raw so that version and node ids are random too) and random input frames
+/// at a live server, between the answers of a controller. The server
+/// answers every request, goes on stepping, counts every bad input, and its
+/// run replays bit for bit.
+#[test]
+fn random_requests_and_inputs_leave_the_server_running() {
+    use cosim_server::bench::{fuzz, robust::Rng};
+    use cosim_shared::wire::{ControlRequest, ControlResponse};
+    use iceoryx2::prelude::*;
+    // A short deadline and no drop: a random reset or restore can bring
+    // back the step the controller answered last, which it then does not
+    // answer again (it answers each step once), so the server waits that
+    // step's deadline out.
+    let (server, dir, name) = serve_test(
+        "fuzz",
+        &[
+            "--controllers",
+            "1",
+            "--deadline-ms",
+            "50",
+            "--drop-after",
+            "1000000",
+        ],
+    );
+    let node = NodeBuilder::new().create::<ipc::Service>().unwrap();
+    let control: ServiceName = cosim_shared::wire::services::control(&name)
+        .as_str()
+        .try_into()
+        .unwrap();
+    let client = node
+        .service_builder(&control)
+        .request_response::<ControlRequest, ControlResponse>()
+        .open()
+        .unwrap()
+        .client_builder()
+        .create()
+        .unwrap();
+    let mut c = Controller::join(&name, WaitMode::Block).expect("join");
+    let conn = Connection::connect(&name).unwrap();
+    let mut rng = Rng::new(15);
+    let (mut answered, mut bad_inputs) = (0u64, 0u64);
+    for _ in 0..200 {
+        // A random pause or step budget stops the stepping: resume it.
+        let start = Instant::now();
+        let f = loop {
+            match c.next_state(Duration::from_millis(100)) {
+                Ok(f) => break f,
+                Err(ClientError::Timeout { .. }) => {
+                    let i = conn.info().expect("the server answers");
+                    assert!(
+                        start.elapsed() < Duration::from_secs(20),
+                        "no state: {:?} {:?}",
+                        (i.step, i.paused, i.controller_count),
+                        c.last_state()
+                            .map(|f| (f.step, f.status, f.controller_count))
+                    );
+                    conn.resume().expect("the server answers");
+                }
+                Err(e) => panic!("the server stopped answering: {e}"),
+            }
+        };
+        // Five random requests, each answered (a scene request with many
+        // chunks, an error with a reason), before the controller answers.
+        for _ in 0..5 {
+            let req = fuzz::control_request(&mut rng);
+            let pending = client.send_copy(req).unwrap();
+            let start = Instant::now();
+            let first = loop {
+                if let Some(r) = pending.receive().unwrap() {
+                    break *r.payload();
+                }
+                assert!(
+                    start.elapsed() < Duration::from_secs(10),
+                    "no answer to {req:?}"
+                );
+                std::thread::yield_now();
+            };
+            if first.status != 0 {
+                assert!(
+                    !first.message().is_empty(),
+                    "{req:?} refused without a reason"
+                );
+            }
+        }
+        // A random input (rejected, or taken: it is the controller's own
+        // publisher) and then, unless it was taken, the proper answer.
+        let bad = fuzz::input_frame(&mut rng, c.id(), f.step, 2, 2);
+        c.send_raw(&bad).unwrap();
+        bad_inputs += 1;
+        let mut input = InputFrame::default();
+        input.push_torque(0, [0.0, -0.1, 0.0]);
+        input.push_torque(1, [0.0; 3]);
+        c.send(input).unwrap();
+        answered += 1;
+    }
+    conn.shutdown().unwrap();
+    let (status, stderr) = server.finish();
+    let s = summary(dir.path());
+    // Exit status 1 says that steps failed (inputs of 1e308 N m): each is
+    // counted, and the run went on after it.
+    let failures = s["failures"].as_u64().unwrap();
+    assert_eq!(
+        status.code(),
+        Some(if failures > 0 { 1 } else { 0 }),
+        "{stderr:.2000}"
+    );
+    assert_eq!(s["ending"], "shutdown", "{s}");
+    let rejected: u64 = s["inputs_rejected"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|v| v.as_u64().unwrap())
+        .sum();
+    assert_eq!(
+        rejected + s["inputs_applied"].as_u64().unwrap(),
+        answered + bad_inputs,
+        "{s}"
+    );
+    assert!(rejected >= 100, "{s}");
+    let (ok, text) = replay(dir.path());
+    assert!(ok, "{text}");
+}
+
+/// Found by the fuzz test above: a held torque that makes a step fail made
+/// every retry fail too, since a controller answers each step once. The
+/// frame of a failed step now asks for a new answer (its slot lacks
+/// SLOT_ANSWERED); the controller sends a sane torque and the run goes on
+/// as if that had been sent in the first place.
+#[test]
+fn a_failed_step_asks_the_controllers_for_a_new_answer() {
+    use cosim_client::{SLOT_ANSWERED, STATUS_SOLVER_FAILED};
+    let (server, dir, name) = serve_test(
+        "answer-again",
+        &[
+            "--controllers",
+            "1",
+            "--steps",
+            "30",
+            "--deadline-ms",
+            "5000",
+        ],
+    );
+    let mut c = Controller::join(&name, WaitMode::Block).expect("join");
+    let conn = Connection::connect(&name).unwrap();
+    let mut failed_frames = 0;
+    answer_until_shutdown(&mut c, |c| {
+        let f = *c.last_state().unwrap();
+        let slot = f.controller(c.id()).unwrap();
+        let mut input = InputFrame::default();
+        if f.status & STATUS_SOLVER_FAILED != 0 {
+            assert_eq!(slot.flags & SLOT_ANSWERED, 0);
+            assert_eq!(f.step, 10);
+            failed_frames += 1;
+            input.push_torque(0, [0.0, 0.2, 0.0]);
+            c.send(input).unwrap();
+            conn.resume().unwrap();
+            return;
+        }
+        let t = if f.step == 10 { 1e308 } else { 0.2 };
+        input.push_torque(0, [0.0, t, 0.0]);
+        c.send(input).unwrap();
+    });
+    let (status, stderr) = server.finish();
+    assert_eq!(status.code(), Some(1), "one step failed: {stderr}");
+    assert_eq!(failed_frames, 1);
+    let s = summary(dir.path());
+    assert_eq!(s["failures"], 1, "{s}");
+    assert_eq!(s["steps"], 30, "{s}");
+    assert_eq!(s["deadline_misses"], 0, "{s}");
+    assert_eq!(
+        positions(dir.path(), "upper"),
+        offline(30, |_| Some([0.0, 0.2, 0.0]))
+    );
+    // The failed attempt is in the log and replays as it went.
+    let (ok, text) = replay(dir.path());
+    assert!(ok, "{text}");
 }

@@ -112,6 +112,11 @@ pub struct ContactFrame {
 pub const SLOT_JOINED: u32 = 1;
 /// The controller's input for the last step did not arrive in time.
 pub const SLOT_MISSED: u32 = 2;
+/// The server holds this controller's answer to the frame's step. A frame
+/// with `STATUS_SOLVER_FAILED` lacks it: the failed step asks every
+/// controller for a new answer (issue 15, found by fuzzing: a held torque
+/// that made the step fail made every retry fail too).
+pub const SLOT_ANSWERED: u32 = 4;
 
 /// A joined controller as the state frame reports it.
 #[repr(C)]

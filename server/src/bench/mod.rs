@@ -4,6 +4,7 @@
 
 pub mod accuracy;
 pub mod cases;
+pub mod fuzz;
 pub mod robust;
 pub mod skips;
 pub mod stress;

@@ -121,6 +121,26 @@ pub enum BenchWhat {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Fuzzing (seeded, stable Rust): mutated and generated scene files
+    /// and random input frames; prints the counts and every defect found
+    /// (a panic, an error that names nothing, a state made non-finite by a
+    /// step that said it was fine). Exit status 1 when it finds any.
+    Fuzz {
+        /// Scene texts to try.
+        #[arg(long, default_value_t = 100_000)]
+        scenes: u64,
+        /// Input frames to try.
+        #[arg(long, default_value_t = 1_000_000)]
+        inputs: u64,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Print the text of scene case N (as a defect names it) and stop.
+        #[arg(long, value_name = "N")]
+        print_scene: Option<u64>,
+        /// Also write the counts to this file.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Stress suite: mass ratios, a pile at rest, 100 m/s impacts,
     /// degenerate and overlapping contacts, redundant joints, a long run,
     /// radii from 1 mm to 10 m. Prints a table (also to --out).
@@ -283,6 +303,48 @@ pub fn main() -> ExitCode {
                     out,
                 },
         } => bench_stress(&solver, long_steps, out.as_deref()),
+        Command::Bench {
+            what:
+                BenchWhat::Fuzz {
+                    print_scene: Some(case),
+                    ..
+                },
+        } => {
+            print!("{}", crate::bench::fuzz::scene_text(case));
+            ExitCode::SUCCESS
+        }
+        Command::Bench {
+            what:
+                BenchWhat::Fuzz {
+                    scenes,
+                    inputs,
+                    seed,
+                    out,
+                    ..
+                },
+        } => {
+            use crate::bench::fuzz;
+            // The engine's warnings about the broken scenes would bury the
+            // counts: the defects are what this prints.
+            let quiet = tracing::subscriber::NoSubscriber::default();
+            let (s, i) = tracing::subscriber::with_default(quiet, || {
+                (fuzz::scenes(seed, scenes), fuzz::inputs(seed, inputs))
+            });
+            let mut text = format!(
+                "bench fuzz (seed {seed})\n{}\n{}\n",
+                s.line("scenes"),
+                i.line("inputs")
+            );
+            for d in s.defects.iter().chain(&i.defects).take(50) {
+                text += &format!("defect: {d}\n");
+            }
+            let code = print_table("bench fuzz", Ok(text), out.as_deref());
+            if s.defects.is_empty() && i.defects.is_empty() {
+                code
+            } else {
+                ExitCode::from(EXIT_FAILED)
+            }
+        }
         Command::Bench {
             what:
                 BenchWhat::Robust {

@@ -23,9 +23,25 @@ use super::state::State;
 use cosim_shared::PositionUpdate;
 use nalgebra::{UnitQuaternion, Vector3};
 
+/// A body's pose after the step: position and orientation.
+pub type Pose = (Vector3<f64>, UnitQuaternion<f64>);
+
 /// Advances every body with the new velocities `nu` (`[v_i, w_i]` per body).
-pub fn positions(state: &mut State, nu: &[f64], h: f64, mode: PositionUpdate, impulsive: &[bool]) {
-    for (i, b) in state.bodies.iter_mut().enumerate() {
+/// The new poses are computed into `poses` first and written only when every
+/// one is finite: finite but huge velocities (an input of 1e308 N m, a scene
+/// spun at 1e308 rad/s) overflow here, and the step must then fail with the
+/// state as it was (issue 15, point 12: the fuzzer found steps that said ok
+/// and left infinite positions). `Err(body)` names the first body at fault.
+pub fn positions(
+    state: &mut State,
+    nu: &[f64],
+    h: f64,
+    mode: PositionUpdate,
+    impulsive: &[bool],
+    poses: &mut Vec<Pose>,
+) -> Result<(), usize> {
+    poses.clear();
+    for (i, b) in state.bodies.iter().enumerate() {
         let k = 6 * i;
         let v = Vector3::new(nu[k], nu[k + 1], nu[k + 2]);
         let w = Vector3::new(nu[k + 3], nu[k + 4], nu[k + 5]);
@@ -35,10 +51,20 @@ pub fn positions(state: &mut State, nu: &[f64], h: f64, mode: PositionUpdate, im
             }
             _ => (v * h, w * h),
         };
-        b.v = v;
-        b.w = w;
-        b.x += dx;
+        let x = b.x + dx;
         let q = UnitQuaternion::from_scaled_axis(dw) * b.q;
-        b.q = UnitQuaternion::new_normalize(q.into_inner());
+        let q = UnitQuaternion::new_normalize(q.into_inner());
+        if !(x.iter().all(|c| c.is_finite()) && q.coords.iter().all(|c| c.is_finite())) {
+            return Err(i);
+        }
+        poses.push((x, q));
     }
+    for (i, (b, &(x, q))) in state.bodies.iter_mut().zip(poses.iter()).enumerate() {
+        let k = 6 * i;
+        b.v = Vector3::new(nu[k], nu[k + 1], nu[k + 2]);
+        b.w = Vector3::new(nu[k + 3], nu[k + 4], nu[k + 5]);
+        b.x = x;
+        b.q = q;
+    }
+    Ok(())
 }

@@ -136,6 +136,8 @@ struct Workspace {
     projection: project::Projection,
     /// Bodies in an impact this step (the trapezoid update skips them).
     impulsive: Vec<bool>,
+    /// The new poses, checked before they are written.
+    poses: Vec<integrate::Pose>,
     /// Lemke's guess for this step's LCP (see `carry_guess`), and its
     /// friction blocks as `(slack, first row, n_d)`.
     guess: Vec<bool>,
@@ -405,7 +407,22 @@ impl Engine {
             timings,
         };
 
-        let solved = self.solve(&mut report, &mut timings, &mut lap);
+        let mut solved = self.solve(&mut report, &mut timings, &mut lap);
+        if solved.is_ok() {
+            let _span = tracing::trace_span!("integrate").entered();
+            self.mark_impulsive();
+            let p = &self.model.params;
+            let ws = &mut self.ws;
+            solved = integrate::positions(
+                &mut self.state,
+                &ws.nu,
+                p.h,
+                p.position_update,
+                &ws.impulsive,
+                &mut ws.poses,
+            )
+            .map_err(|body| StepError::NonFinitePose { body });
+        }
         self.inputs.clear_impulses();
         if let Err(e) = solved {
             report.error = Some(e);
@@ -417,16 +434,6 @@ impl Engine {
         }
 
         {
-            let _span = tracing::trace_span!("integrate").entered();
-            self.mark_impulsive();
-            let p = &self.model.params;
-            integrate::positions(
-                &mut self.state,
-                &self.ws.nu,
-                p.h,
-                p.position_update,
-                &self.ws.impulsive,
-            );
             self.state.step += 1;
             self.state.t = self.state.step as f64 * self.model.params.h;
             self.prepared = false;

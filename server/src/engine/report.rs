@@ -13,6 +13,11 @@ pub enum StepError {
     Mlcp(MlcpError),
     /// The new velocities are not finite (an input or the scene overflowed).
     NonFinite,
+    /// The new pose of `body` is not finite: its velocities are finite but
+    /// so large that a step's motion overflows.
+    NonFinitePose {
+        body: usize,
+    },
 }
 
 impl std::fmt::Display for StepError {
@@ -21,6 +26,10 @@ impl std::fmt::Display for StepError {
             StepError::Lemke(e) => write!(f, "lemke: {e}"),
             StepError::Mlcp(e) => write!(f, "{e}"),
             StepError::NonFinite => write!(f, "non-finite velocities"),
+            StepError::NonFinitePose { body } => write!(
+                f,
+                "the new pose of body {body} is not finite (its velocity overflows a step)"
+            ),
         }
     }
 }
@@ -34,6 +43,7 @@ impl StepError {
             StepError::Lemke(LemkeError::NumericalBreakdown { .. }) => "numerical_breakdown",
             StepError::Mlcp(MlcpError::SingularJointBlock { .. }) => "singular_joint_block",
             StepError::NonFinite => "non_finite",
+            StepError::NonFinitePose { .. } => "non_finite_pose",
         }
     }
 }

@@ -90,6 +90,8 @@ pub struct Slot {
     pub missed_now: bool,
     /// Left after answering the coming step: removed once it is taken.
     pub leaving: bool,
+    /// Departure checks in a row that found it gone (`drop_departed`).
+    pub gone_checks: u8,
 }
 
 impl Slot {
@@ -107,6 +109,7 @@ impl Slot {
             logged: 0,
             missed_now: false,
             leaving: false,
+            gone_checks: 0,
         }
     }
 

@@ -506,7 +506,13 @@ impl Server {
         for (out, s) in f.controllers.iter_mut().zip(&self.slots) {
             *out = ControllerSlot {
                 id: s.id,
-                flags: SLOT_JOINED | if s.missed_now { SLOT_MISSED } else { 0 },
+                flags: SLOT_JOINED
+                    | if s.missed_now { SLOT_MISSED } else { 0 }
+                    | if s.answered == Some(f.step) {
+                        SLOT_ANSWERED
+                    } else {
+                        0
+                    },
                 rejected: s.rejected,
                 misses: s.misses,
                 last_step: s.answered.unwrap_or(0),
@@ -529,6 +535,7 @@ impl Server {
         for s in &mut self.slots {
             s.rejected = 0;
             s.missed_now = false;
+            s.gone_checks = 0;
         }
         if self.slots.is_empty() {
             return Ok((Flow::Go, Instant::now()));
@@ -603,12 +610,16 @@ impl Server {
     fn drop_departed(&mut self, k: u64) -> bool {
         let svc = &self.svc;
         let before = self.slots.len();
-        self.slots.retain(|s| {
+        self.slots.retain_mut(|s| {
             if s.answered == Some(k) {
                 return true;
             }
-            let gone = s.publisher.is_some_and(|p| !svc.publisher_connected(p))
+            // Two verdicts in a row: a node list read while other processes
+            // create and remove nodes can miss a live one once.
+            let now = s.publisher.is_some_and(|p| !svc.publisher_connected(p))
                 || cosim_client::node_alive(s.node_id) == Some(false);
+            s.gone_checks = if now { s.gone_checks + 1 } else { 0 };
+            let gone = s.gone_checks >= 2;
             if gone {
                 tracing::warn!(
                     "controller {} (pid {}) exited without leaving at step {k}; dropped",
@@ -830,6 +841,13 @@ impl Server {
                 controllers::FailurePolicy::Abort => self.failed_stop = true,
                 _ => self.paused = true,
             }
+            // The inputs may be what failed (a torque of 1e308 N m is
+            // finite): the retry waits for a new answer from each
+            // controller, which the failed frame asks for (no
+            // SLOT_ANSWERED). Held torques stay until replaced.
+            for s in &mut self.slots {
+                s.answered = None;
+            }
         } else {
             self.c.steps += 1;
             if let Some(fb) = report.fallback {
@@ -1014,6 +1032,14 @@ impl Server {
     }
 
     fn join(&mut self, req: &Request, r: &ControlRequest) -> Result<(), ServeError> {
+        if r.role != ROLE_CONTROLLER && r.role != ROLE_MONITOR {
+            self.refuse(
+                req,
+                RESP_BAD_REQUEST,
+                &format!("role = {}: 1 joins a controller, 2 a monitor", r.role),
+            );
+            return Ok(());
+        }
         if r.role == ROLE_MONITOR {
             // A monitor need not join (subscribing to the state is enough);
             // one that does is counted in monitor_count until it leaves
