@@ -1,10 +1,11 @@
-//! `cosim-server`: the engine (a pure library) and the edges around it: the
-//! built-in scenes, the output writers and the command line.
+//! `cosim-server`: the edges around the engine (the `cosim-engine` crate, a
+//! pure library, re-exported here as `engine`): the built-in scenes, the
+//! output writers, the services and the command line.
 
 pub mod bench;
 pub mod cli;
 pub mod corpus;
-pub mod engine;
+pub use cosim_engine as engine;
 pub mod output;
 pub mod plot;
 pub mod scenes;

@@ -3,6 +3,7 @@
 //! contract (service names and wire types, see `docs/protocol.md`).
 
 pub mod scene;
+#[cfg(feature = "wire")]
 pub mod wire;
 
 /// Header of `states.csv`, written by `run`, `serve` and `cosim record`.

@@ -21,9 +21,9 @@
 //! lambda`), so a row costs O(1) and no Delassus matrix is needed.
 
 use super::Lcp;
-use crate::engine::applied::InvMass;
-use crate::engine::contact::direction_coefficients as direction;
-use crate::engine::rows::Row;
+use crate::applied::InvMass;
+use crate::contact::direction_coefficients as direction;
+use crate::rows::Row;
 
 /// Default stopping tolerance on the relative residual.
 pub const DEFAULT_TOLERANCE: f64 = 1e-10;

@@ -1,5 +1,5 @@
 use super::{Counterpart, Geometry};
-use crate::engine::model::Plane;
+use crate::model::Plane;
 use nalgebra::Vector3;
 
 /// A sphere (body A) against a fixed plane (B): the normal is the plane's,
