@@ -12,7 +12,8 @@ pub const SLIDING_SPEED: f64 = 1e-9;
 
 #[derive(Debug, Clone, Copy)]
 pub struct Contact {
-    /// Index in the canonical enumeration of potential contacts.
+    /// Index in the canonical enumeration of potential contacts
+    /// (`Model::contact_id`): its identity from step to step.
     pub id: usize,
     pub geom: Geometry,
     pub mu: f64,
@@ -78,7 +79,8 @@ pub fn perpendicular(n: &Vector3<f64>) -> Vector3<f64> {
 /// Builds the contact set from the geometry of every potential contact.
 pub fn build(model: &Model, state: &State, geoms: &[Geometry], out: &mut Vec<Contact>) {
     out.clear();
-    for (id, g) in geoms.iter().enumerate() {
+    for g in geoms {
+        let id = model.contact_id(g.a, g.b);
         let a = &model.bodies[g.a];
         let (mu_b, e_b) = match g.b {
             Counterpart::Plane(p) => (model.planes[p].friction, model.planes[p].restitution),

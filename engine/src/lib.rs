@@ -138,6 +138,12 @@ struct Workspace {
     impulsive: Vec<bool>,
     /// The new poses, checked before they are written.
     poses: Vec<integrate::Pose>,
+    /// The broad phase: its scratch, each body's covered reach (m) this
+    /// step, and `(id, in_lcp)` of the contacts while it widens.
+    collision: collision::Scratch,
+    reach: Vec<f64>,
+    kept: Vec<(usize, bool)>,
+    zeros: Vec<f64>,
     /// Lemke's guess for this step's LCP (see `carry_guess`), and its
     /// friction blocks as `(slack, first row, n_d)`.
     guess: Vec<bool>,
@@ -146,12 +152,91 @@ struct Workspace {
     iterative: iterative::Scratch,
 }
 
+/// The speed bound of a body over the step that the broad phase must
+/// cover: the start or the free speed (what `prune::select` uses), or the
+/// new speed after a solve (what `prune::check_left_out` uses).
+#[derive(Debug, Clone, Copy)]
+enum Speeds {
+    Free,
+    New,
+}
+
+/// Whether the broad phase lists the sphere pairs (else every pair is a
+/// potential contact, as in the notes).
+fn broad_phase(p: &model::Params) -> bool {
+    !p.full && p.skips.broad_phase
+}
+
 impl Workspace {
-    /// Collision, contact set and inverse masses of `state`.
+    /// Collision, contact set and inverse masses of `state`. The broad
+    /// phase covers, for each body, the distance it travels in the step at
+    /// its start speed plus twice what gravity adds in a step (a body at
+    /// rest then needs no widening); `widen` grows that when the free or
+    /// the new velocities reach farther.
     fn contact_set(&mut self, model: &Model, state: &State) {
-        collision::detect(model, state, &mut self.geoms);
-        contact::build(model, state, &self.geoms, &mut self.contacts);
+        let p = &model.params;
+        self.reach.clear();
+        let g = p.gravity.norm();
+        self.reach.extend(
+            state
+                .bodies
+                .iter()
+                .map(|b| p.h * (b.v.norm() + 2.0 * p.h * g)),
+        );
+        self.detect(model, state);
         applied::inverse_masses(model, state, &mut self.minv);
+    }
+
+    fn detect(&mut self, model: &Model, state: &State) {
+        let p = &model.params;
+        let within = broad_phase(p).then_some((&self.reach[..], p.contact_margin));
+        collision::detect(model, state, within, &mut self.collision, &mut self.geoms);
+        contact::build(model, state, &self.geoms, &mut self.contacts);
+    }
+
+    /// Grows the broad phase's reach where a body's speed bound `speed(i)`
+    /// (m/s, over the step) goes past it, and lists the contacts that adds;
+    /// the contacts listed before keep their `in_lcp`, the new ones are left
+    /// out (`prune::check_left_out` then tests them). Returns whether the
+    /// list changed. Without the broad phase every pair is listed already.
+    fn widen(&mut self, model: &Model, state: &State, speeds: Speeds) -> bool {
+        let p = &model.params;
+        if !broad_phase(p) {
+            return false;
+        }
+        let mut grown = false;
+        let linear = |nu: &[f64], i: usize| Vector3::new(nu[6 * i], nu[6 * i + 1], nu[6 * i + 2]);
+        for (i, r) in self.reach.iter_mut().enumerate() {
+            let speed = match speeds {
+                Speeds::Free => state.bodies[i]
+                    .v
+                    .norm()
+                    .max(linear(&self.nu_free, i).norm()),
+                Speeds::New => linear(&self.nu, i).norm(),
+            };
+            let need = p.h * speed;
+            if need > *r {
+                // Twice what is needed: one widening per step, not one per
+                // re-solve.
+                *r = 2.0 * need;
+                grown = true;
+            }
+        }
+        if !grown {
+            return false;
+        }
+        let before = self.contacts.len();
+        self.kept.clear();
+        self.kept
+            .extend(self.contacts.iter().map(|c| (c.id, c.in_lcp)));
+        self.detect(model, state);
+        // Both lists are sorted by id (canonical order): merge.
+        let mut k = self.kept.iter().peekable();
+        for c in self.contacts.iter_mut() {
+            while k.next_if(|&&(id, _)| id < c.id).is_some() {}
+            c.in_lcp = k.next_if(|&&(id, _)| id == c.id).is_some_and(|&(_, f)| f);
+        }
+        self.contacts.len() != before
     }
 
     /// The free velocity under `inputs` and the contacts it selects for
@@ -159,6 +244,11 @@ impl Workspace {
     /// step's own.
     fn select(&mut self, model: &Model, state: &State, inputs: &Inputs) {
         applied::free_velocity(model, state, inputs, &self.minv, &mut self.nu_free);
+        if self.widen(model, state, Speeds::Free) {
+            // The contact indices changed: a matrix made for the old list
+            // would be taken for the new one.
+            self.mlcp.invalidate();
+        }
         prune::select(&mut self.contacts, state, &self.nu_free, &model.params);
     }
 }
@@ -580,9 +670,19 @@ impl Engine {
             if !ws.nu.iter().all(|x| x.is_finite()) {
                 return Err(StepError::NonFinite);
             }
+            // Pairs the new velocities could bring into reach are listed
+            // first, left out, so that the check below tests them too. The
+            // list's indices then changed: the LCP is made again from it,
+            // whatever the check finds (the same LCP, by id, if nothing).
+            let widened = ws.widen(model, &self.state, Speeds::New);
+            if widened {
+                ws.mlcp.invalidate();
+            }
             let added = prune::check_left_out(&mut ws.contacts, &ws.nu, p.h, relaxed);
             if added > 0 {
                 report.resolves += 1;
+            }
+            if added > 0 || widened {
                 continue;
             }
             // NOTE: once, after the first accepted solve: re-solve on the
@@ -708,8 +808,15 @@ impl Engine {
     ) -> StepReport {
         let _span = tracing::trace_span!("measure").entered();
         report.energy = measure::energy(&self.model, &self.state);
-        report.max_penetration =
-            measure::max_penetration(&self.model, &self.state, &mut self.ws.measure);
+        let ws = &mut self.ws;
+        ws.zeros.resize(self.model.bodies.len(), 0.0);
+        report.max_penetration = measure::max_penetration(
+            &self.model,
+            &self.state,
+            &ws.zeros,
+            &mut ws.collision,
+            &mut ws.measure,
+        );
         report.max_joint_error = measure::max_joint_error(&self.model, &self.state);
         timings.measure = lap.lap();
         timings.total += lap.total();

@@ -1,6 +1,7 @@
 //! The compiled scene: immutable while the simulation runs (MuJoCo's
 //! `mjModel`). Everything that changes lives in [`State`](super::State).
 
+use crate::collision::Counterpart;
 use cosim_shared::{FrictionCone, Scene, SolverChoice};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
@@ -158,6 +159,9 @@ pub struct Skips {
     /// Lemke first tries the last step's support, carried over by contact
     /// identity ([`Lemke::solve_guess`](super::solver::Lemke::solve_guess)).
     pub lemke_guess: bool,
+    /// The broad phase lists only the sphere pairs within reach
+    /// (`collision/broad.rs`) instead of every pair.
+    pub broad_phase: bool,
 }
 
 impl Default for Skips {
@@ -166,6 +170,7 @@ impl Default for Skips {
             frictionless_rows: true,
             warm_start: true,
             lemke_guess: true,
+            broad_phase: true,
         }
     }
 }
@@ -313,6 +318,20 @@ impl Model {
     /// Number of potential contacts: every sphere against every plane and,
     /// unless `sphere_contacts` is off, every other sphere (7 in the
     /// reference scene).
+    /// The canonical index of the potential contact of body `a` with `b`:
+    /// its place in the full enumeration (sphere-plane body-major, then the
+    /// sphere pairs `a < b` in order), which identifies it from step to step
+    /// whether or not the broad phase lists the contacts between.
+    pub fn contact_id(&self, a: usize, b: Counterpart) -> usize {
+        let (n, np) = (self.bodies.len(), self.planes.len());
+        match b {
+            Counterpart::Plane(p) => a * np + p,
+            // Pairs (a, a+1 .. n-1) for a = 0, 1, ...: a (2n - a - 1) / 2 of
+            // them come before row a.
+            Counterpart::Body(j) => n * np + a * (2 * n - a - 1) / 2 + (j - a - 1),
+        }
+    }
+
     pub fn potential_contacts(&self) -> usize {
         let n = self.bodies.len();
         let pairs = if self.params.sphere_contacts {

@@ -1,5 +1,6 @@
 //! The skips of the step do not change the answer (issue #6): pruning,
-//! no friction rows where mu = 0, Lemke's support guess, PGS warm start,
+//! the broad phase (issue 14), no friction rows where mu = 0, Lemke's
+//! support guess, PGS warm start,
 //! each on and off on the same scene (`cosim-server bench skips` times them).
 
 use cosim_server::bench::skips;
@@ -31,6 +32,9 @@ fn skips_do_not_change_the_trajectory() {
         // order 1 m/s), the chaotic trajectory then drifts as above.
         let (d, bound) = match m.skip {
             s if s.starts_with("pruning") => (skips::distance(&m.on, &m.off), 0.0),
+            // The broad phase leaves out only pairs that prune.rs leaves
+            // out too, and keeps the canonical order: identical to the bit.
+            s if s.starts_with("broad") => (skips::distance(&m.on, &m.off), 0.0),
             s if s.starts_with("no friction") => (skips::distance(&m.on, &m.off), 1e-12),
             s if s.starts_with("Lemke") => (m.per_step.difference, 1e-8),
             _ => (m.per_step.difference, 1e-6),
@@ -48,4 +52,45 @@ fn skips_do_not_change_the_trajectory() {
             m.per_step.difference
         );
     }
+}
+
+/// The broad phase's reach grows within a step when a body moves farther
+/// than its start speed said (issue 14): A is shot at B by a client impulse
+/// (its free speed reaches past its start speed of zero), and B, which
+/// rests, is thrown into C by that contact (its new speed reaches past its
+/// free speed). Every pair is caught, and the run is the one that lists all
+/// pairs, to the bit.
+#[test]
+fn the_broad_phase_widens_for_fast_free_and_new_speeds() {
+    use cosim_server::bench::text::sphere;
+    use cosim_server::engine::{Engine, Model};
+    use nalgebra::Vector3;
+    let text = format!(
+        "[sim]\nname = \"chain\"\ndt = 0.001\nsteps = 100\ngravity = [0.0, 0.0, 0.0]\nsolver = \"lemke\"\n\n{}{}{}",
+        sphere("a", 0.05, 1.0, [0.0, 0.0, 0.0], [0.0; 3], 0.2, 0.0),
+        sphere("b", 0.05, 1.0, [0.1, 0.0, 0.0], [0.0; 3], 0.2, 0.0),
+        sphere("c", 0.05, 1.0, [0.21, 0.0, 0.0], [0.0; 3], 0.2, 0.0),
+    );
+    let scene = cosim_shared::Scene::parse(&text, "<chain>").unwrap();
+    let run = |broad: bool| {
+        let mut model = Model::from_scene(&scene);
+        model.params.skips.broad_phase = broad;
+        let mut e = Engine::new(model);
+        let mut states = Vec::new();
+        for k in 0..100 {
+            if k == 0 {
+                e.add_body_impulse(0, Vector3::new(30.0, 0.0, 0.0), Vector3::zeros())
+                    .unwrap();
+            }
+            let r = e.step();
+            assert!(r.ok(), "{r:?}");
+            states.push(e.state().clone());
+        }
+        states
+    };
+    let (on, off) = (run(true), run(false));
+    assert!(on == off, "the broad phase changed the trajectory");
+    // The impulse went down the chain: C moves off, faster than A.
+    let last = &on[99].bodies;
+    assert!(last[2].v.x > 1.0 && last[2].v.x > last[0].v.x, "{last:?}");
 }

@@ -1,8 +1,10 @@
 //! Collision stage: the signed gap, normal and lever arms of every potential
 //! contact, in a canonical order (each sphere against each plane, body-major,
-//! then each pair of spheres) so that a contact's index is its identity from
-//! step to step. One file per shape pair.
+//! then each pair of spheres) so that a contact's canonical index
+//! (`Model::contact_id`) is its identity from step to step. One file per
+//! shape pair; `broad.rs` finds the sphere pairs within reach.
 
+mod broad;
 mod sphere_plane;
 mod sphere_sphere;
 
@@ -10,6 +12,7 @@ use super::model::{Model, Shape};
 use super::state::State;
 use nalgebra::Vector3;
 
+pub use broad::Broad;
 pub use sphere_plane::sphere_plane;
 pub use sphere_sphere::sphere_sphere;
 
@@ -36,11 +39,28 @@ pub struct Geometry {
     pub r_b: Vector3<f64>,
 }
 
-/// Fills `out` with every potential contact of the scene, in canonical order.
-/// With `sphere_contacts = false` the sphere pairs are not potential
-/// contacts at all; they come last in the order, so the other contacts keep
-/// their identities.
-pub fn detect(model: &Model, state: &State, out: &mut Vec<Geometry>) {
+/// Scratch space of the collision stage.
+#[derive(Debug, Default, Clone)]
+pub struct Scratch {
+    broad: Broad,
+    pairs: Vec<(usize, usize)>,
+}
+
+/// Fills `out` with the potential contacts of the scene, in canonical
+/// order: every sphere against every plane, then the sphere pairs. With
+/// `within = None` every pair (the notes' enumeration, and `full`); with
+/// `Some((reach, margin))` only the pairs whose gap is at most `reach[a] +
+/// reach[b] + margin` (the broad phase, `broad.rs`): the others cannot close
+/// within a step in which no body travels farther than its reach. With
+/// `sphere_contacts = false` there are no pairs; they come last in the
+/// order, so the other contacts keep their identities.
+pub fn detect(
+    model: &Model,
+    state: &State,
+    within: Option<(&[f64], f64)>,
+    scratch: &mut Scratch,
+    out: &mut Vec<Geometry>,
+) {
     out.clear();
     for (i, body) in model.bodies.iter().enumerate() {
         let Shape::Sphere { radius } = body.shape;
@@ -51,18 +71,31 @@ pub fn detect(model: &Model, state: &State, out: &mut Vec<Geometry>) {
     if !model.params.sphere_contacts {
         return;
     }
-    for i in 0..model.bodies.len() {
-        for j in i + 1..model.bodies.len() {
-            let (Shape::Sphere { radius: ra }, Shape::Sphere { radius: rb }) =
-                (model.bodies[i].shape, model.bodies[j].shape);
-            out.push(sphere_sphere(
-                i,
-                state.bodies[i].x,
-                ra,
-                j,
-                state.bodies[j].x,
-                rb,
-            ));
+    let radius = |i: usize| {
+        let Shape::Sphere { radius } = model.bodies[i].shape;
+        radius
+    };
+    let pair = |(i, j): (usize, usize)| {
+        sphere_sphere(
+            i,
+            state.bodies[i].x,
+            radius(i),
+            j,
+            state.bodies[j].x,
+            radius(j),
+        )
+    };
+    let n = model.bodies.len();
+    match within {
+        None => {
+            for i in 0..n {
+                out.extend((i + 1..n).map(|j| pair((i, j))));
+            }
+        }
+        Some((reach, margin)) => {
+            let Scratch { broad, pairs } = scratch;
+            broad.pairs(|i| state.bodies[i].x, radius, reach, margin, pairs);
+            out.extend(pairs.iter().map(|&p| pair(p)));
         }
     }
 }

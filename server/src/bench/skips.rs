@@ -143,16 +143,63 @@ fn model(scene: &Scene, solver: SolverChoice) -> Model {
     Model::from_scene(&s)
 }
 
+/// Spheres flying about in a closed box without gravity (seeded, 64
+/// spheres of 3 to 6 cm at up to 2 m/s, mu = 0.3, e = 0.5): a few touch at a
+/// time, so that listing every pair (2,016) against those within reach is
+/// what the broad phase saves.
+pub fn gas() -> Result<Scene, String> {
+    use crate::bench::text::{plane, sphere};
+    let mut rng = crate::bench::robust::Rng::new(14);
+    let mut t = String::from(
+        "[sim]\nname = \"gas\"\ndt = 0.002\nsteps = 1000\ngravity = [0.0, 0.0, 0.0]\nfriction_directions = 4\nsolver = \"lemke\"\n\n",
+    );
+    for (i, n) in [
+        [1.0, 0.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, -1.0],
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let point = [-0.5 * n[0], -0.5 * n[1], -0.5 * n[2]];
+        t += &plane(&format!("wall{i}"), n, point, 0.3, 0.5);
+    }
+    // A 4 x 4 x 4 lattice 0.2 m apart, so that nothing starts overlapping.
+    for i in 0..64usize {
+        let x = [
+            -0.3 + 0.2 * (i % 4) as f64,
+            -0.3 + 0.2 * (i / 4 % 4) as f64,
+            -0.3 + 0.2 * (i / 16) as f64,
+        ];
+        let mut v = || rng.range(-2.0, 2.0);
+        let vel = [v(), v(), v()];
+        let r = rng.range(0.03, 0.06);
+        t += &sphere(&format!("s{i}"), r, 1.0, x, vel, 0.3, 0.5);
+    }
+    Scene::parse(&t, "<gas>").map_err(|e| e.to_string())
+}
+
 /// The skips on their scenes: pruning, Lemke's support guess and PGS's
 /// warm start on the reference scene, friction rows on the frictionless
-/// scene.
+/// scene, the broad phase on [`gas`].
 pub fn measure(steps: u64) -> Result<Vec<Measured>, String> {
     let reference = crate::scenes::reference().map_err(|e| e.to_string())?;
     let frictionless =
         Scene::parse(FRICTIONLESS, "frictionless.toml").map_err(|e| e.to_string())?;
+    let gas = gas()?;
     // Each skip: its scene and solver, and how to switch it off.
     type Off = fn(&mut Params);
-    let cases: [(&'static str, &'static str, &Scene, SolverChoice, Off); 4] = [
+    let cases: [(&'static str, &'static str, &Scene, SolverChoice, Off); 5] = [
+        (
+            "broad phase (sphere pairs within reach)",
+            "gas of 64 spheres, Lemke",
+            &gas,
+            SolverChoice::Lemke,
+            |p| p.skips.broad_phase = false,
+        ),
         (
             "pruning (contacts that cannot close)",
             "reference, Lemke",
