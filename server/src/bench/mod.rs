@@ -5,6 +5,7 @@
 pub mod accuracy;
 pub mod cases;
 pub mod fuzz;
+pub mod pile;
 pub mod robust;
 pub mod skips;
 pub mod stress;

@@ -1,0 +1,105 @@
+//! The pile of issue 14: N spheres (r = 0.05 m, m = 1 kg, mu = 0.5) on a
+//! grid 0.12 m apart with 1 cm of seeded jitter, dropped into a box of a
+//! floor and four walls. For N = 100 it is the issue's 5 x 5 x 4 grid in
+//! walls 0.35 m from the centre; a larger N keeps the grid's footprint
+//! square (side `ceil(sqrt(N / layers))`, four layers per 100 spheres'
+//! worth of height) and the walls 0.05 m outside it.
+
+use crate::bench::robust::Rng;
+use crate::bench::text::{plane, sphere};
+use cosim_shared::Scene;
+
+/// Sphere radius (m) of the pile.
+pub const RADIUS: f64 = 0.05;
+
+/// The grid of `n` spheres: side of the square layer and the layer count.
+fn grid(n: usize) -> (usize, usize) {
+    if n <= 100 {
+        return (5, n.div_ceil(25));
+    }
+    // Layers about as many as the side, as a cube (10 x 10 x 10 for 1,000).
+    let side = (n as f64).cbrt().ceil() as usize;
+    (side, n.div_ceil(side * side))
+}
+
+/// The pile's half width: the walls' distance from the centre (m).
+pub fn half_width(n: usize) -> f64 {
+    let (side, _) = grid(n);
+    if n <= 100 {
+        0.35
+    } else {
+        0.5 * 0.12 * side as f64 + 0.05
+    }
+}
+
+/// The scene text of a pile of `n` spheres, with step `dt` and friction
+/// directions `nd`, solver `solver` (`"pgs"`, `"lemke"`, `"auto"`).
+pub fn text(n: usize, dt: f64, nd: usize, solver: &str, steps: u64, seed: u64) -> String {
+    let (side, _) = grid(n);
+    let w = half_width(n);
+    let mut rng = Rng::new(seed);
+    let mut t = format!(
+        "[sim]\nname = \"pile-{n}\"\ndt = {dt:e}\nsteps = {steps}\nfriction_directions = {nd}\nsolver = \"{solver}\"\n\n"
+    );
+    t += &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.5, 0.0);
+    for (i, (nx, ny)) in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
+        .into_iter()
+        .enumerate()
+    {
+        t += &plane(
+            &format!("wall{i}"),
+            [nx, ny, 0.0],
+            [-w * nx, -w * ny, 0.0],
+            0.5,
+            0.0,
+        );
+    }
+    let origin = -0.5 * 0.12 * (side as f64 - 1.0);
+    for i in 0..n {
+        let (ix, iy, iz) = (i % side, i / side % side, i / (side * side));
+        let mut jitter = || rng.range(-0.01, 0.01);
+        let x = [
+            origin + 0.12 * ix as f64 + jitter(),
+            origin + 0.12 * iy as f64 + jitter(),
+            RADIUS + 0.02 + 0.12 * iz as f64 + jitter().abs(),
+        ];
+        t += &sphere(&format!("s{i}"), RADIUS, 1.0, x, [0.0; 3], 0.5, 0.0);
+    }
+    t
+}
+
+/// [`text`] parsed.
+pub fn scene(n: usize, dt: f64, nd: usize, solver: &str, steps: u64, seed: u64) -> Scene {
+    Scene::parse(&text(n, dt, nd, solver, steps, seed), "<pile>")
+        .unwrap_or_else(|e| panic!("the pile scene is valid: {e}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_pile_starts_inside_its_box_without_overlaps() {
+        for n in [100usize, 1000, 4000] {
+            let s = scene(n, 0.01, 4, "pgs", 10, 1);
+            assert_eq!(s.bodies.len(), n);
+            let w = half_width(n);
+            let x: Vec<[f64; 3]> = s.bodies.iter().map(|b| b.position).collect();
+            for p in &x {
+                assert!(
+                    p[0].abs() + RADIUS < w && p[1].abs() + RADIUS < w,
+                    "{n}: {p:?}"
+                );
+                assert!(p[2] > RADIUS, "{n}: {p:?}");
+            }
+            // Neighbours on the grid are 0.12 m apart, less 2 cm of jitter.
+            for (i, a) in x.iter().enumerate() {
+                for b in &x[i + 1..] {
+                    let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2))
+                        .sqrt();
+                    assert!(d > 2.0 * RADIUS, "{n}: spheres {d} m apart");
+                }
+            }
+        }
+    }
+}
