@@ -852,7 +852,13 @@ impl Mlcp {
         select(&mut self.weighted, &self.kept);
         let new_r = nb + self.kept.len();
         let old = |i: usize| if i < nb { i } else { nb + self.kept[i - nb] };
+        // The buffers swap roles below, so each is grown to the other's
+        // capacity: whichever is `w` next can then hold the largest matrix
+        // seen, and a step after warm-up allocates nothing (without this a
+        // second pass over the same run reallocated `w` once, found with
+        // the broad phase's gas scene in tests/tests/no_allocation.rs).
         self.w_cut.clear();
+        self.w_cut.reserve(self.w.capacity());
         for i in 0..new_r {
             for j in 0..new_r {
                 self.w_cut.push(self.w[old(i) * r + old(j)]);
@@ -860,6 +866,7 @@ impl Mlcp {
         }
         std::mem::swap(&mut self.w, &mut self.w_cut);
         self.y_cut.clear();
+        self.y_cut.reserve(self.y.capacity());
         if nb > 0 {
             for &k in &self.kept {
                 self.y_cut.extend_from_slice(&self.y[k * nb..(k + 1) * nb]);
