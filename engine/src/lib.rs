@@ -16,6 +16,7 @@ pub mod collision;
 pub mod contact;
 pub mod fallback;
 pub mod integrate;
+pub mod island;
 pub mod iterative;
 pub mod measure;
 pub mod mlcp;
@@ -144,6 +145,7 @@ struct Workspace {
     reach: Vec<f64>,
     kept: Vec<(usize, bool)>,
     zeros: Vec<f64>,
+    islands: island::Islands,
     /// Lemke's guess for this step's LCP (see `carry_guess`), and its
     /// friction blocks as `(slack, first row, n_d)`.
     guess: Vec<bool>,
@@ -493,6 +495,8 @@ impl Engine {
             early_matrix: false,
             max_penetration: 0.0,
             max_joint_error: 0.0,
+            islands: 0,
+            largest_island: 0,
             energy: Default::default(),
             timings,
         };
@@ -529,6 +533,9 @@ impl Engine {
             self.prepared = false;
         }
         self.record_impulses();
+        let summary = self.partition();
+        report.islands = summary.count;
+        report.largest_island = summary.largest;
         report.active_contacts = self
             .ws
             .impulses
@@ -696,6 +703,28 @@ impl Engine {
                 return Ok(());
             }
         }
+    }
+
+    /// The islands of the step's final LCP: bodies tied by its contacts
+    /// and by the joints (`island.rs`).
+    fn partition(&mut self) -> island::Summary {
+        use model::Attachment;
+        let ws = &mut self.ws;
+        let contacts = ws
+            .contacts
+            .iter()
+            .filter(|c| c.in_lcp)
+            .map(|c| (c.geom.a, c.geom.b));
+        let joints = self.model.joints.iter().filter_map(|j| match (j.a, j.b) {
+            (Attachment::Body(a), Attachment::Body(b)) => Some((a, Counterpart::Body(b))),
+            // The world is static, as a plane: it ties one body to nothing.
+            (Attachment::Body(a), Attachment::World) | (Attachment::World, Attachment::Body(a)) => {
+                Some((a, Counterpart::Plane(usize::MAX)))
+            }
+            (Attachment::World, Attachment::World) => None,
+        });
+        ws.islands
+            .partition(self.model.bodies.len(), contacts.chain(joints))
     }
 
     /// For the trapezoid update, the bodies that keep the Euler update: the

@@ -112,6 +112,11 @@ pub struct StepReport {
     /// Contacts in that LCP, and those with a positive normal impulse.
     pub contacts_in_lcp: usize,
     pub active_contacts: usize,
+    /// Islands of the step's final LCP (bodies tied by its contacts and
+    /// joints, `island.rs`), and the bodies of the largest; 0 on a failed
+    /// step.
+    pub islands: usize,
+    pub largest_island: usize,
     /// Left-out contacts that the velocity check added back (re-solves).
     pub resolves: usize,
     /// The iterative solver stopped on its iteration cap, not its tolerance:
