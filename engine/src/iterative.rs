@@ -181,11 +181,13 @@ fn warm_start(m: &mut Mlcp, state: &State, step: Step) {
     }
     m.lambda[..m.nb].copy_from_slice(&state.warm_joint);
     for (i, &ci) in m.lcp_contacts.iter().enumerate() {
-        m.lambda[m.nb + i] = state.warm_normal[step.contacts[ci].id];
+        m.lambda[m.nb + i] = state.warm(step.contacts[ci].id).map_or(0.0, |w| w.normal);
     }
     for (f, &i) in m.friction_of.iter().enumerate() {
         let c = &step.contacts[m.lcp_contacts[i]];
-        let w = state.warm_friction[c.id];
+        let Some(w) = state.warm(c.id).map(|w| w.friction) else {
+            continue;
+        };
         let base = m.nb + m.nc + f * m.nd;
         pgs::warm_friction(
             [w.dot(&c.t1), w.dot(&c.t2)],

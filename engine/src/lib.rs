@@ -32,7 +32,7 @@ pub use applied::{InputError, Inputs};
 pub use fallback::Fallback;
 pub use model::{Attachment, Model, Skips};
 pub use report::{LadderCounts, Lap, StepError, StepReport, Timings};
-pub use state::{BodyState, State};
+pub use state::{BodyState, State, WarmContact};
 
 use applied::InvMass;
 use collision::{Counterpart, Geometry};
@@ -309,8 +309,11 @@ impl Engine {
         mine.warm_active.extend_from_slice(&state.warm_active);
         mine.warm_lcp.clear();
         mine.warm_lcp.extend_from_slice(&state.warm_lcp);
+        mine.warm_contacts.clear();
+        mine.warm_contacts.extend_from_slice(&state.warm_contacts);
         std::mem::swap(&mut mine.warm_active, &mut state.warm_active);
         std::mem::swap(&mut mine.warm_lcp, &mut state.warm_lcp);
+        std::mem::swap(&mut mine.warm_contacts, &mut state.warm_contacts);
         self.state = state;
         self.prepared = false;
     }
@@ -773,11 +776,8 @@ impl Engine {
         self.state
             .warm_active
             .extend(m.z[..m.lcp_size()].iter().map(|&x| x > 0.0));
-        self.state.warm_normal.fill(0.0);
-        self.state.warm_friction.fill(Vector3::zeros());
-        for (i, &ci) in m.lcp_contacts.iter().enumerate() {
-            self.state.warm_normal[ws.contacts[ci].id] = m.z[i];
-        }
+        // Filled below in the LCP's contact order, which is ascending id.
+        self.state.warm_contacts.clear();
         for (j, joint) in self.model.joints.iter().enumerate() {
             let p = Vector3::new(m.p_b[3 * j], m.p_b[3 * j + 1], m.p_b[3 * j + 2]);
             let party = |a: Attachment| match a {
@@ -813,19 +813,24 @@ impl Engine {
             }
             let block = friction.next_if(|(_, &row)| row == i);
             self.state.warm_lcp.push((c.id, block.is_some()));
+            let mut p = Vector3::zeros();
             if let Some((f, _)) = block {
                 let base = m.nc + f * nd;
-                let p: Vector3<f64> = (0..nd)
+                p = (0..nd)
                     .map(|j| {
                         let (cs, sn) = m.direction(j);
                         (c.t1 * cs + c.t2 * sn) * m.z[base + j]
                     })
                     .sum();
-                self.state.warm_friction[c.id] = p;
                 if p != Vector3::zeros() {
                     ws.impulses.push(record(ImpulseKind::Friction, p));
                 }
             }
+            self.state.warm_contacts.push(WarmContact {
+                id: c.id,
+                normal: m.z[i],
+                friction: p,
+            });
         }
     }
 
