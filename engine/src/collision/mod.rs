@@ -48,10 +48,11 @@ pub struct Scratch {
 
 /// Fills `out` with the potential contacts of the scene, in canonical
 /// order: every sphere against every plane, then the sphere pairs. With
-/// `within = None` every pair (the notes' enumeration, and `full`); with
+/// `within = None` every contact (the notes' enumeration, and `full`); with
 /// `Some((reach, margin))` only the pairs whose gap is at most `reach[a] +
-/// reach[b] + margin` (the broad phase, `broad.rs`): the others cannot close
-/// within a step in which no body travels farther than its reach. With
+/// reach[b] + margin` (the broad phase, `broad.rs`) and the sphere-plane
+/// contacts whose gap is at most `reach[a] + margin`: the others cannot
+/// close within a step in which no body travels farther than its reach. With
 /// `sphere_contacts = false` there are no pairs; they come last in the
 /// order, so the other contacts keep their identities.
 pub fn detect(
@@ -65,7 +66,12 @@ pub fn detect(
     for (i, body) in model.bodies.iter().enumerate() {
         let Shape::Sphere { radius } = body.shape;
         for (p, plane) in model.planes.iter().enumerate() {
-            out.push(sphere_plane(i, state.bodies[i].x, radius, p, plane));
+            let g = sphere_plane(i, state.bodies[i].x, radius, p, plane);
+            // A plane is static: the sphere alone must cover the gap (its
+            // normal speed against the plane is at most its speed).
+            if within.is_none_or(|(reach, margin)| g.gap <= reach[i] + margin) {
+                out.push(g);
+            }
         }
     }
     if !model.params.sphere_contacts {
