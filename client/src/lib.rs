@@ -415,11 +415,29 @@ impl StateReader {
         buffer: usize,
         wake: bool,
     ) -> Result<Self, ClientError> {
+        Self::open_stream(
+            node,
+            name,
+            buffer,
+            wake,
+            (services::state(name), services::state_ready(name)),
+        )
+    }
+
+    /// Subscribes to the state stream `(service, event)` of server `name`:
+    /// every frame, or the decimated stream.
+    fn open_stream(
+        node: &Node<ipc::Service>,
+        name: &str,
+        buffer: usize,
+        wake: bool,
+        (state, ready): (String, String),
+    ) -> Result<Self, ClientError> {
         let service = node
-            .service_builder(&service_name(&services::state(name))?)
+            .service_builder(&service_name(&state)?)
             .publish_subscribe::<StateFrame>()
             .open()
-            .map_err(|e| missing(name, &services::state(name), e))?;
+            .map_err(|e| missing(name, &state, e))?;
         let sub = service
             .subscriber_builder()
             .buffer_size(buffer)
@@ -427,10 +445,10 @@ impl StateReader {
             .map_err(|e| ipc("cannot subscribe to the state")(&e))?;
         let ready = if wake {
             Some(
-                node.service_builder(&service_name(&services::state_ready(name))?)
+                node.service_builder(&service_name(&ready)?)
                     .event()
                     .open()
-                    .map_err(|e| missing(name, &services::state_ready(name), e))?
+                    .map_err(|e| missing(name, &ready, e))?
                     .listener_builder()
                     .create()
                     .map_err(|e| ipc("cannot listen for state frames")(&e))?,
@@ -810,6 +828,21 @@ impl Monitor {
     /// sleeping a millisecond between polls.
     pub fn polling(name: &str) -> Result<Monitor, ClientError> {
         Monitor::create(name, 1, false)
+    }
+
+    /// Subscribes to the decimated stream of a server started with
+    /// `--publish-every N`: every N-th step's frame and the last. A server
+    /// without it has no such stream ([`ClientError::NoServer`] names it).
+    pub fn open_every(name: &str, buffer: usize) -> Result<Monitor, ClientError> {
+        let node = NodeBuilder::new()
+            .create::<ipc::Service>()
+            .map_err(|e| ipc("cannot create an iceoryx2 node")(&e))?;
+        let stream = (
+            services::state_every(name),
+            services::state_every_ready(name),
+        );
+        let reader = StateReader::open_stream(&node, name, buffer, true, stream)?;
+        Ok(Monitor { node, reader })
     }
 
     fn create(name: &str, buffer: usize, wake: bool) -> Result<Monitor, ClientError> {

@@ -1680,3 +1680,44 @@ fn a_failed_step_asks_the_controllers_for_a_new_answer() {
     let (ok, text) = replay(dir.path());
     assert!(ok, "{text}");
 }
+
+/// Issue 14, point 6 (part): `--publish-every N` adds a decimated stream
+/// for monitors that want fewer frames: every N-th step once (not again
+/// when the frame is published anew after the join), and the last frame.
+#[test]
+fn a_decimated_stream_carries_every_nth_step_and_the_last() {
+    let (server, _dir, name) = serve_test(
+        "every",
+        &[
+            "--controllers",
+            "1",
+            "--steps",
+            "95",
+            "--publish-every",
+            "10",
+        ],
+    );
+    // Opened before the controller joins: nothing is stepped before.
+    let m = Monitor::open_every(&name, 64).expect("the decimated stream");
+    assert!(
+        matches!(
+            Monitor::open_every(&unique("every-none"), 4),
+            Err(ClientError::NoServer { .. })
+        ),
+        "a server without --publish-every has no such stream"
+    );
+    let mut c = Controller::join(&name, WaitMode::Block).expect("join");
+    answer_until_shutdown(&mut c, |c| c.send(InputFrame::default()).unwrap());
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    let mut seen = Vec::new();
+    while let Ok(f) = m.next(Duration::from_millis(500)) {
+        seen.push((f.step, f.status & STATUS_SHUTDOWN != 0));
+        if f.status & STATUS_SHUTDOWN != 0 {
+            break;
+        }
+    }
+    let mut want: Vec<(u64, bool)> = (0..=90).step_by(10).map(|k| (k, false)).collect();
+    want.push((95, true));
+    assert_eq!(seen, want);
+}

@@ -47,6 +47,16 @@ pub mod services {
     pub fn state_ready(name: &str) -> String {
         format!("{ROOT}{name}/state-ready")
     }
+    /// Publish-subscribe, server to monitors, with `serve --publish-every
+    /// N`: the frames of every N-th step (and the last), for monitors that
+    /// want fewer frames than the lockstep's.
+    pub fn state_every(name: &str) -> String {
+        format!("{ROOT}{name}/state-every")
+    }
+    /// Event, server to the decimated stream's readers: "a frame of it".
+    pub fn state_every_ready(name: &str) -> String {
+        format!("{ROOT}{name}/state-every-ready")
+    }
     /// Event, clients to server: "an input or a request was sent".
     pub fn wake(name: &str) -> String {
         format!("{ROOT}{name}/wake")

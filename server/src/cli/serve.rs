@@ -63,6 +63,11 @@ pub struct ServeArgs {
     /// Print nothing but errors.
     #[arg(long)]
     pub quiet: bool,
+    /// Also publish every N-th step's state (and the last) on
+    /// `cosim/NAME/state-every`, for monitors that want fewer frames
+    /// (`cosim_client::Monitor::open_every`).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub publish_every: Option<u64>,
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -194,6 +199,7 @@ fn options(args: &ServeArgs) -> Result<(cosim_shared::Scene, ServeOptions), Stri
         }),
         quiet: args.quiet,
         timeline: false,
+        publish_every: args.publish_every,
     };
     Ok((scene, opts))
 }
@@ -287,6 +293,7 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
         out: Some(args.out.clone()),
         no_record: false,
         quiet: false,
+        publish_every: None,
     };
     let (scene, opts) = match options(&serve_args) {
         Ok(x) => x,

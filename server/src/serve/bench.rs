@@ -267,6 +267,7 @@ fn lockstep(
         out: None,
         quiet: true,
         timeline: sidecar == Some("monitor-toggle"),
+        publish_every: None,
     };
     let server = std::thread::spawn(move || serve(&scene, opts).map_err(|e| e.to_string()));
     // Peers retry until the server's services exist.

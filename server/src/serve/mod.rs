@@ -60,6 +60,9 @@ pub struct ServeOptions {
     /// `steps` of them (allocated before the first step): for a benchmark
     /// that compares windows of one run.
     pub timeline: bool,
+    /// Also publish every N-th step's frame (and the last) on the
+    /// decimated stream `cosim/NAME/state-every` (`--publish-every N`).
+    pub publish_every: Option<u64>,
 }
 
 /// How often a late controller is checked for having exited (its
@@ -215,6 +218,8 @@ struct Server {
     model_hash: u64,
     slots: Vec<Slot>,
     next_id: u32,
+    /// The step last sent on the decimated stream.
+    every_step: Option<u64>,
     /// Ids of the monitors that joined (see `join`).
     monitors: Vec<u32>,
     paused: bool,
@@ -260,7 +265,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
     // NOTE: the name first: a server refused because another of its name
     // runs must not touch that one's folder (issue 15: a refused server
     // rewrote scene.toml and the first run's replay failed at step 1).
-    let svc = Services::create(&opts.name)?;
+    let svc = Services::create(&opts.name, opts.publish_every.is_some())?;
     if let Some(out) = &opts.out {
         std::fs::create_dir_all(out)?;
         std::fs::write(out.join("scene.toml"), &toml)?;
@@ -286,6 +291,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         toml,
         slots: Vec::with_capacity(MAX_CONTROLLERS),
         next_id: 1,
+        every_step: None,
         monitors: Vec::new(),
         paused: false,
         budget: None,
@@ -519,6 +525,16 @@ impl Server {
             };
         }
         self.svc.publish(f)?;
+        // The decimated stream: each N-th step once (a frame published
+        // again for the same step, after a join or a pause, is not sent
+        // twice), and the last frame whatever its step.
+        if let Some(n) = self.opts.publish_every {
+            let last = f.status & STATUS_SHUTDOWN != 0;
+            if (f.step.is_multiple_of(n.max(1)) && self.every_step != Some(f.step)) || last {
+                self.every_step = Some(f.step);
+                self.svc.publish_every(f)?;
+            }
+        }
         Ok(())
     }
 

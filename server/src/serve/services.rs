@@ -44,6 +44,14 @@ impl fmt::Display for ServiceError {
     }
 }
 
+/// The decimated stream's publisher, its event, and what earlier frames
+/// left in its samples.
+type Decimated = (
+    Publisher<ipc::Service, StateFrame, ()>,
+    Notifier<ipc::Service>,
+    Written,
+);
+
 pub type Request = ActiveRequest<ipc::Service, ControlRequest, (), ControlResponse, ()>;
 type InputService =
     iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, InputFrame, ()>;
@@ -62,6 +70,8 @@ pub struct Services {
     pub control: Server<ipc::Service, ControlRequest, (), ControlResponse, ()>,
     pub state_ready: Notifier<ipc::Service>,
     pub wake: Listener<ipc::Service>,
+    /// The decimated stream, with `--publish-every N`.
+    every: Option<Decimated>,
     /// The services whose ports tell who sent an input or a request.
     input_service: InputService,
     control_service: ControlService,
@@ -87,7 +97,7 @@ impl Services {
     /// Creates every service of server `server`. Stale resources of dead
     /// processes are removed first, so that a server killed without
     /// cleanup does not block its name.
-    pub fn create(server: &str) -> Result<Services, ServiceError> {
+    pub fn create(server: &str, decimated: bool) -> Result<Services, ServiceError> {
         let node_name: NodeName = format!("cosim-server-{server}")
             .as_str()
             .try_into()
@@ -145,21 +155,23 @@ impl Services {
 
         // NOTE: overflow stays enabled on the state: a reader that stops
         // reading loses old frames instead of blocking the server.
-        let state = node
-            .service_builder(&name(&services::state(server))?)
-            .publish_subscribe::<StateFrame>()
-            .enable_safe_overflow(true)
-            .history_size(1)
-            .subscriber_max_buffer_size(services::MAX_STATE_BUFFER)
-            .subscriber_max_borrowed_samples(2)
-            .max_subscribers(services::MAX_STATE_SUBSCRIBERS)
-            .max_publishers(1)
-            .max_nodes(services::MAX_STATE_SUBSCRIBERS + 2)
-            .open_or_create()
-            .map_err(|e| err(format!("cannot create {}", services::state(server)))(&e))?
-            .publisher_builder()
-            .create()
-            .map_err(|e| err("cannot publish the state".into())(&e))?;
+        let state_stream = |service: String| -> Result<_, ServiceError> {
+            node.service_builder(&name(&service)?)
+                .publish_subscribe::<StateFrame>()
+                .enable_safe_overflow(true)
+                .history_size(1)
+                .subscriber_max_buffer_size(services::MAX_STATE_BUFFER)
+                .subscriber_max_borrowed_samples(2)
+                .max_subscribers(services::MAX_STATE_SUBSCRIBERS)
+                .max_publishers(1)
+                .max_nodes(services::MAX_STATE_SUBSCRIBERS + 2)
+                .open_or_create()
+                .map_err(|e| err(format!("cannot create {service}"))(&e))?
+                .publisher_builder()
+                .create()
+                .map_err(|e| err(format!("cannot publish {service}"))(&e))
+        };
+        let state = state_stream(services::state(server))?;
         let input_service = node
             .service_builder(&name(&services::input(server))?)
             .publish_subscribe::<InputFrame>()
@@ -192,7 +204,18 @@ impl Services {
             .listener_builder()
             .create()
             .map_err(|e| err("cannot create the wake-up listener".into())(&e))?;
+        let every = if decimated {
+            let publisher = state_stream(services::state_every(server))?;
+            let ready = event(services::state_every_ready(server))?
+                .notifier_builder()
+                .create()
+                .map_err(|e| err("cannot create the decimated stream's notifier".into())(&e))?;
+            Some((publisher, ready, Written::default()))
+        } else {
+            None
+        };
         Ok(Services {
+            every,
             node,
             state,
             input,
@@ -214,6 +237,20 @@ impl Services {
         self.state_ready
             .notify()
             .map_err(|e| err("cannot notify the state readers".into())(&e))?;
+        Ok(())
+    }
+
+    /// Publishes a frame on the decimated stream (when there is one) and
+    /// wakes its readers.
+    pub fn publish_every(&mut self, frame: &StateFrame) -> Result<(), ServiceError> {
+        let Some((publisher, ready, written)) = self.every.as_mut() else {
+            return Ok(());
+        };
+        send_used(publisher, frame, written)
+            .map_err(|e| err("cannot publish the decimated state".into())(&e))?;
+        ready
+            .notify()
+            .map_err(|e| err("cannot notify the decimated stream's readers".into())(&e))?;
         Ok(())
     }
 
