@@ -81,6 +81,39 @@ pub enum ClientError {
 /// at the timeout.
 pub const SERVER_CHECK: Duration = Duration::from_millis(100);
 
+/// The server checks of one wait: every [`SERVER_CHECK`] of it, and gone
+/// after two verdicts in a row (a node list read while other processes
+/// create and remove nodes can miss a live node once).
+struct GoneCheck {
+    next: Duration,
+    verdicts: u32,
+}
+
+impl GoneCheck {
+    fn new() -> GoneCheck {
+        GoneCheck {
+            next: SERVER_CHECK,
+            verdicts: 0,
+        }
+    }
+
+    /// True when the wait, `elapsed` into it, has found the server gone:
+    /// `alive` is asked at each check.
+    fn gone(&mut self, elapsed: Duration, alive: impl FnOnce() -> bool) -> bool {
+        if elapsed < self.next {
+            return false;
+        }
+        self.next += SERVER_CHECK;
+        self.verdicts = if alive() { 0 } else { self.verdicts + 1 };
+        self.verdicts >= 2
+    }
+}
+
+/// Whether the node of a server's port (`None`: no port left) lives.
+fn port_alive(node: Option<u128>) -> bool {
+    node.is_some_and(|n| node_alive(n) != Some(false))
+}
+
 impl fmt::Display for ClientError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -219,14 +252,12 @@ impl Connection {
 
     /// Whether a live server holds the control service.
     pub fn server_alive(&self) -> bool {
-        let mut nodes = [0u128; 1];
-        let mut n = 0;
+        let mut node = None;
         self.control_service.dynamic_config().list_servers(|d| {
-            nodes[0] = d.node_id.value();
-            n = 1;
+            node = Some(d.node_id.value());
             CallbackProgression::Stop
         });
-        n == 1 && node_alive(nodes[0]) != Some(false)
+        port_alive(node)
     }
 
     fn gone(&self) -> ClientError {
@@ -269,8 +300,7 @@ impl Connection {
             return Err(self.gone());
         }
         let start = Instant::now();
-        let mut next_check = start + SERVER_CHECK;
-        let mut gone = 0u32;
+        let mut check = GoneCheck::new();
         loop {
             while let Some(r) = pending
                 .receive()
@@ -298,13 +328,8 @@ impl Connection {
             if !pending.is_connected() {
                 return Err(self.gone());
             }
-            if Instant::now() >= next_check {
-                next_check += SERVER_CHECK;
-                // Two verdicts in a row, as in `StateReader::wait_with`.
-                gone = if self.server_alive() { 0 } else { gone + 1 };
-                if gone >= 2 {
-                    return Err(self.gone());
-                }
+            if check.gone(start.elapsed(), || self.server_alive()) {
+                return Err(self.gone());
             }
             if self.node.wait(Duration::from_micros(50)).is_err() {
                 return Err(ClientError::Interrupted);
@@ -473,7 +498,7 @@ impl StateReader {
             node = Some(p.node_id.value());
             CallbackProgression::Stop
         });
-        node.is_some_and(|n| node_alive(n) != Some(false))
+        port_alive(node)
     }
 
     /// The newest frame in the buffer, if any (older ones are dropped
@@ -540,10 +565,7 @@ impl StateReader {
             WaitMode::Hybrid => HYBRID_SPIN.min(timeout),
         };
         let mut spins = 0u32;
-        let mut next_check = SERVER_CHECK;
-        // Two verdicts in a row: a node list read while other processes
-        // create and remove nodes can miss a live one once.
-        let mut gone = 0u32;
+        let mut check = GoneCheck::new();
         loop {
             if let Some(sample) = self.receive(newest)? {
                 if accept(sample.payload()) {
@@ -559,19 +581,13 @@ impl StateReader {
                     after: timeout,
                 });
             }
-            if elapsed >= next_check {
-                next_check += SERVER_CHECK;
-                // Frames the server sent before it went are read first.
-                if self.server_alive() || self.sub.has_samples().unwrap_or(false) {
-                    gone = 0;
-                } else {
-                    gone += 1;
-                    if gone >= 2 {
-                        return Err(ClientError::ServerGone {
-                            name: self.name.clone(),
-                        });
-                    }
-                }
+            // Frames the server sent before it went are read first.
+            if check.gone(elapsed, || {
+                self.server_alive() || self.sub.has_samples().unwrap_or(false)
+            }) {
+                return Err(ClientError::ServerGone {
+                    name: self.name.clone(),
+                });
             }
             if elapsed < spin_for {
                 spins = spins.wrapping_add(1);

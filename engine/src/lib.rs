@@ -144,7 +144,6 @@ struct Workspace {
     collision: collision::Scratch,
     reach: Vec<f64>,
     kept: Vec<(usize, bool)>,
-    zeros: Vec<f64>,
     islands: island::Islands,
     /// Lemke's guess for this step's LCP (see `carry_guess`), and its
     /// friction blocks as `(slack, first row, n_d)`.
@@ -161,12 +160,6 @@ struct Workspace {
 enum Speeds {
     Free,
     New,
-}
-
-/// Whether the broad phase lists the sphere pairs (else every pair is a
-/// potential contact, as in the notes).
-fn broad_phase(p: &model::Params) -> bool {
-    !p.full && p.skips.broad_phase
 }
 
 impl Workspace {
@@ -191,8 +184,15 @@ impl Workspace {
 
     fn detect(&mut self, model: &Model, state: &State) {
         let p = &model.params;
-        let within = broad_phase(p).then_some((&self.reach[..], p.contact_margin));
-        collision::detect(model, state, within, &mut self.collision, &mut self.geoms);
+        let listing = if p.broad_phase() {
+            collision::Listing::Within {
+                reach: &self.reach,
+                margin: p.contact_margin,
+            }
+        } else {
+            collision::Listing::All
+        };
+        collision::detect(model, state, listing, &mut self.collision, &mut self.geoms);
         contact::build(model, state, &self.geoms, &mut self.contacts);
     }
 
@@ -203,7 +203,7 @@ impl Workspace {
     /// list changed. Without the broad phase every pair is listed already.
     fn widen(&mut self, model: &Model, state: &State, speeds: Speeds) -> bool {
         let p = &model.params;
-        if !broad_phase(p) {
+        if !p.broad_phase() {
             return false;
         }
         let mut grown = false;
@@ -843,14 +843,8 @@ impl Engine {
         let _span = tracing::trace_span!("measure").entered();
         report.energy = measure::energy(&self.model, &self.state);
         let ws = &mut self.ws;
-        ws.zeros.resize(self.model.bodies.len(), 0.0);
-        report.max_penetration = measure::max_penetration(
-            &self.model,
-            &self.state,
-            &ws.zeros,
-            &mut ws.collision,
-            &mut ws.measure,
-        );
+        report.max_penetration =
+            measure::max_penetration(&self.model, &self.state, &mut ws.collision, &mut ws.measure);
         report.max_joint_error = measure::max_joint_error(&self.model, &self.state);
         timings.measure = lap.lap();
         timings.total += lap.total();

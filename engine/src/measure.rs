@@ -1,6 +1,6 @@
 //! Measurements of a state: energy, penetration, joint error.
 
-use super::collision::{detect, Geometry, Scratch};
+use super::collision::{detect, Geometry, Listing, Scratch};
 use super::mlcp::anchor;
 use super::model::Model;
 use super::state::State;
@@ -43,19 +43,20 @@ pub fn energy(model: &Model, state: &State) -> Energy {
 }
 
 /// Deepest penetration over every potential contact (m, >= 0). Only
-/// overlapping pairs can have one: the broad phase with no reach and no
-/// margin lists them (every pair without it, as the step does).
-///
-/// `zeros` holds a zero reach per body.
+/// overlapping contacts can have one: the broad phase lists just those
+/// (every contact without it, as the step does).
 pub fn max_penetration(
     model: &Model,
     state: &State,
-    zeros: &[f64],
     collision: &mut Scratch,
     scratch: &mut Vec<Geometry>,
 ) -> f64 {
-    let within = (!model.params.full && model.params.skips.broad_phase).then_some((zeros, 0.0));
-    detect(model, state, within, collision, scratch);
+    let listing = if model.params.broad_phase() {
+        Listing::Overlapping
+    } else {
+        Listing::All
+    };
+    detect(model, state, listing, collision, scratch);
     scratch.iter().fold(0.0f64, |a, g| a.max(-g.gap))
 }
 

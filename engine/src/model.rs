@@ -147,6 +147,14 @@ impl From<cosim_shared::scene::SpringDesc> for Compliance {
     }
 }
 
+impl Params {
+    /// Whether the broad phase lists the contacts (`collision::Listing`),
+    /// else every potential contact is listed, as in the notes.
+    pub fn broad_phase(&self) -> bool {
+        !self.full && self.skips.broad_phase
+    }
+}
+
 /// Work a step leaves out when the scene does not need it. Pruning is
 /// `Params::full`; the joint block is absent without joints by
 /// construction.

@@ -144,11 +144,9 @@ fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
         joints += usize::from(!model.joints.is_empty());
         let engine = Engine::new(model.clone());
         let (mut scratch, mut geoms) = Default::default();
-        let zeros = vec![0.0; model.bodies.len()];
         let deep = cosim_server::engine::measure::max_penetration(
             &model,
             engine.state(),
-            &zeros,
             &mut scratch,
             &mut geoms,
         );

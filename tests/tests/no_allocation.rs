@@ -48,24 +48,33 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
+/// Runs `model` for `steps` steps (the warm-up: one pass sees the largest
+/// problems), then the same steps again from the initial state; the
+/// allocations of the second pass, and the active contacts of the first.
+fn second_pass_allocations(model: Model, steps: usize) -> (usize, usize) {
+    let mut engine = Engine::new(model);
+    let initial = engine.state().clone();
+    let mut contacts = 0;
+    for _ in 0..steps {
+        let r = engine.step();
+        assert!(r.ok());
+        contacts += r.active_contacts;
+    }
+    engine.set_state(initial);
+    let before = allocations();
+    for _ in 0..steps {
+        assert!(engine.step().ok());
+    }
+    (allocations() - before, contacts)
+}
+
 #[test]
 fn stepping_allocates_nothing_after_warm_up() {
     for full in [true, false] {
         let scene = scenes::reference().expect("built-in scene");
         let mut model = Model::from_scene(&scene);
         model.params.full = full;
-        let mut engine = Engine::new(model);
-        let initial = engine.state().clone();
-        // Warm-up: one pass over the run sees the largest problems.
-        for _ in 0..2000 {
-            assert!(engine.step().ok());
-        }
-        engine.set_state(initial);
-        let before = allocations();
-        for _ in 0..2000 {
-            assert!(engine.step().ok());
-        }
-        let made = allocations() - before;
+        let (made, _) = second_pass_allocations(model, 2000);
         assert_eq!(
             made, 0,
             "full = {full}: {made} allocations in 2000 steps after warm-up"
@@ -83,21 +92,8 @@ fn the_broad_phase_allocates_nothing_after_warm_up() {
     for broad in [true, false] {
         let mut model = Model::from_scene(&scene);
         model.params.skips.broad_phase = broad;
-        let mut engine = Engine::new(model);
-        let initial = engine.state().clone();
-        let mut contacts = 0;
-        for _ in 0..1000 {
-            let r = engine.step();
-            assert!(r.ok());
-            contacts += r.active_contacts;
-        }
+        let (made, contacts) = second_pass_allocations(model, 1000);
         assert!(contacts > 100, "the spheres touch: {contacts} contacts");
-        engine.set_state(initial);
-        let before = allocations();
-        for _ in 0..1000 {
-            assert!(engine.step().ok());
-        }
-        let made = allocations() - before;
         assert_eq!(
             made, 0,
             "broad phase {broad}: {made} allocations in 1000 steps after warm-up"

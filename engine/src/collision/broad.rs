@@ -50,23 +50,23 @@ fn cell_of(x: &Vector3<f64>, size: f64) -> [i64; 3] {
 }
 
 impl Broad {
-    /// Fills `out` with every pair `(a, b)`, `a < b`, of spheres (centres
-    /// `x`, radii `r`) whose gap is at most `reach[a] + reach[b] + margin`,
-    /// sorted.
+    /// Fills `out` with every pair `(a, b)`, `a < b`, of the `n` spheres
+    /// (centres `x`, radii `r`) whose gap is at most `reach(a) + reach(b) +
+    /// margin`, sorted.
     pub fn pairs(
         &mut self,
+        n: usize,
         x: impl Fn(usize) -> Vector3<f64>,
         r: impl Fn(usize) -> f64,
-        reach: &[f64],
+        reach: impl Fn(usize) -> f64,
         margin: f64,
         out: &mut Vec<(usize, usize)>,
     ) {
         out.clear();
-        let n = reach.len();
         if n < 2 {
             return;
         }
-        let grown = (0..n).fold(0.0f64, |m, i| m.max(r(i) + reach[i]));
+        let grown = (0..n).fold(0.0f64, |m, i| m.max(r(i) + reach(i)));
         let size = (2.0 * grown + margin).max(f64::MIN_POSITIVE);
         self.cells.clear();
         self.cells
@@ -89,7 +89,7 @@ impl Broad {
                                 continue;
                             }
                             let gap = (x(b) - xa).norm() - r(a) - r(b);
-                            if gap <= reach[a] + reach[b] + margin {
+                            if gap <= reach(a) + reach(b) + margin {
                                 out.push((a, b));
                             }
                         }
@@ -134,7 +134,7 @@ mod tests {
                 .map(|i| if i % 11 == 0 { 0.2 } else { 0.001 })
                 .collect();
             let margin = 1e-3;
-            broad.pairs(|i| x[i], |i| r[i], &reach, margin, &mut got);
+            broad.pairs(300, |i| x[i], |i| r[i], |i| reach[i], margin, &mut got);
             let mut want = Vec::new();
             for a in 0..300 {
                 for b in a + 1..300 {

@@ -46,30 +46,58 @@ pub struct Scratch {
     pairs: Vec<(usize, usize)>,
 }
 
-/// Fills `out` with the potential contacts of the scene, in canonical
-/// order: every sphere against every plane, then the sphere pairs. With
-/// `within = None` every contact (the notes' enumeration, and `full`); with
-/// `Some((reach, margin))` only the pairs whose gap is at most `reach[a] +
-/// reach[b] + margin` (the broad phase, `broad.rs`) and the sphere-plane
-/// contacts whose gap is at most `reach[a] + margin`: the others cannot
-/// close within a step in which no body travels farther than its reach. With
-/// `sphere_contacts = false` there are no pairs; they come last in the
-/// order, so the other contacts keep their identities.
+/// Which potential contacts [`detect`] lists.
+#[derive(Debug, Clone, Copy)]
+pub enum Listing<'a> {
+    /// Every one: the notes' enumeration, `full`, and the broad phase off.
+    All,
+    /// The broad phase: a pair whose gap is at most `reach[a] + reach[b] +
+    /// margin`, a sphere-plane contact whose gap is at most `reach[a] +
+    /// margin` (a plane is static: the sphere alone must cover the gap, its
+    /// normal speed against the plane being at most its speed). The others
+    /// cannot close within a step in which no body travels farther than its
+    /// reach (m).
+    Within { reach: &'a [f64], margin: f64 },
+    /// Those that overlap (`Within` with no reach and no margin): all that
+    /// a penetration can be measured on.
+    Overlapping,
+}
+
+impl Listing<'_> {
+    /// Body `i`'s reach (m); none outside the broad phase's listing.
+    fn reach(&self, i: usize) -> f64 {
+        match self {
+            Listing::Within { reach, .. } => reach[i],
+            Listing::All | Listing::Overlapping => 0.0,
+        }
+    }
+
+    fn margin(&self) -> f64 {
+        match self {
+            Listing::Within { margin, .. } => *margin,
+            Listing::All | Listing::Overlapping => 0.0,
+        }
+    }
+}
+
+/// Fills `out` with the potential contacts of the scene that `listing`
+/// names, in canonical order: every sphere against every plane, then the
+/// sphere pairs. With `sphere_contacts = false` there are no pairs; they
+/// come last in the order, so the other contacts keep their identities.
 pub fn detect(
     model: &Model,
     state: &State,
-    within: Option<(&[f64], f64)>,
+    listing: Listing,
     scratch: &mut Scratch,
     out: &mut Vec<Geometry>,
 ) {
     out.clear();
+    let all = matches!(listing, Listing::All);
     for (i, body) in model.bodies.iter().enumerate() {
         let Shape::Sphere { radius } = body.shape;
         for (p, plane) in model.planes.iter().enumerate() {
             let g = sphere_plane(i, state.bodies[i].x, radius, p, plane);
-            // A plane is static: the sphere alone must cover the gap (its
-            // normal speed against the plane is at most its speed).
-            if within.is_none_or(|(reach, margin)| g.gap <= reach[i] + margin) {
+            if all || g.gap <= listing.reach(i) + listing.margin() {
                 out.push(g);
             }
         }
@@ -92,16 +120,21 @@ pub fn detect(
         )
     };
     let n = model.bodies.len();
-    match within {
-        None => {
-            for i in 0..n {
-                out.extend((i + 1..n).map(|j| pair((i, j))));
-            }
+    if all {
+        for i in 0..n {
+            out.extend((i + 1..n).map(|j| pair((i, j))));
         }
-        Some((reach, margin)) => {
-            let Scratch { broad, pairs } = scratch;
-            broad.pairs(|i| state.bodies[i].x, radius, reach, margin, pairs);
-            out.extend(pairs.iter().map(|&p| pair(p)));
-        }
+        return;
     }
+    let Scratch { broad, pairs } = scratch;
+    let reach = |i| listing.reach(i);
+    broad.pairs(
+        n,
+        |i| state.bodies[i].x,
+        radius,
+        reach,
+        listing.margin(),
+        pairs,
+    );
+    out.extend(pairs.iter().map(|&p| pair(p)));
 }

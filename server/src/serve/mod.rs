@@ -425,7 +425,7 @@ impl Server {
             self.engine.prepare();
             let t_wait = Instant::now();
             self.c.prepare.add(us(published, t_wait));
-            let t_step = match self.gather(k, published, self.frame_out)? {
+            let t_step = match self.gather(k, published)? {
                 (Flow::Go, t) => t,
                 (Flow::Stop(e), _) => return Ok(e),
             };
@@ -541,12 +541,7 @@ impl Server {
     /// Step k's inputs: until every controller answered or the deadline
     /// (from `published`). Also returns when it ended: the round trip's
     /// end, timed from `frame_out`, when the frame went out.
-    fn gather(
-        &mut self,
-        k: u64,
-        published: Instant,
-        frame_out: Instant,
-    ) -> Result<(Flow, Instant), ServeError> {
+    fn gather(&mut self, k: u64, published: Instant) -> Result<(Flow, Instant), ServeError> {
         self.status &= !(STATUS_INPUT_REJECTED | STATUS_DEADLINE_MISSED | STATUS_SOLVER_FAILED);
         for s in &mut self.slots {
             s.rejected = 0;
@@ -585,7 +580,7 @@ impl Server {
             }
             if done {
                 let now = Instant::now();
-                self.c.round_trips.add(us(frame_out, now));
+                self.c.round_trips.add(us(self.frame_out, now));
                 return Ok((Flow::Go, now));
             }
             // Requests in the same loop: a controller that leaves is not
@@ -612,7 +607,7 @@ impl Server {
             if now < spin_until {
                 std::hint::spin_loop();
             } else {
-                self.svc.block((deadline.min(next_check)) - now)?;
+                self.svc.block(deadline.min(next_check) - now)?;
             }
         }
         Ok((self.misses(k)?, Instant::now()))
