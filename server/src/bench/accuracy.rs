@@ -167,6 +167,8 @@ fn engine(model: Model, setting: &Setting) -> Engine {
     if setting.solver == SolverChoice::Pgs {
         e.set_pgs_params(PgsParams {
             tolerance: setting.tolerance,
+            // The setting names the relative residual: that rule alone.
+            velocity_tolerance: 0.0,
             ..PgsParams::default()
         });
     }

@@ -7,6 +7,7 @@
 
 use crate::bench::robust::Rng;
 use crate::bench::text::{plane, sphere};
+use crate::engine::solver::PgsParams;
 use cosim_shared::Scene;
 
 /// Sphere radius (m) of the pile.
@@ -72,6 +73,123 @@ pub fn text(n: usize, dt: f64, nd: usize, solver: &str, steps: u64, seed: u64) -
 pub fn scene(n: usize, dt: f64, nd: usize, solver: &str, steps: u64, seed: u64) -> Scene {
     Scene::parse(&text(n, dt, nd, solver, steps, seed), "<pile>")
         .unwrap_or_else(|e| panic!("the pile scene is valid: {e}"))
+}
+
+/// One pile run's figures (`bench pile`).
+#[derive(Debug, Clone, Default)]
+pub struct Outcome {
+    pub n: usize,
+    pub steps: u64,
+    /// Steps that failed (the run stops at the first).
+    pub failed: u64,
+    /// Steps whose solve stopped at the iteration cap.
+    pub capped: u64,
+    /// Median and total wall time of a step (s).
+    pub median_step: f64,
+    pub total: f64,
+    /// Median and largest solver work per step (sweeps or pivots).
+    pub median_work: usize,
+    pub max_work: usize,
+    /// Largest overlap of two spheres or a sphere and a wall over the run (m).
+    pub worst_overlap: f64,
+    /// Spheres outside the box at the end.
+    pub escaped: usize,
+    /// Kinetic energy at the end (J).
+    pub kinetic: f64,
+    /// The state's heap bytes per body at the end.
+    pub state_bytes_per_body: f64,
+}
+
+/// Runs the pile of `n` spheres for `steps` steps of `dt` with `solver`;
+/// `trace` prints every `trace`-th step's report (0: none).
+pub fn run(
+    n: usize,
+    dt: f64,
+    steps: u64,
+    solver: &str,
+    pgs: PgsParams,
+    seed: u64,
+    trace: u64,
+) -> Outcome {
+    use crate::engine::{Engine, Model};
+    let scene = scene(n, dt, 4, solver, steps, seed);
+    let mut e = Engine::new(Model::from_scene(&scene));
+    e.set_pgs_params(pgs);
+    let mut times = Vec::with_capacity(steps as usize);
+    let mut work = Vec::with_capacity(steps as usize);
+    let mut out = Outcome {
+        n,
+        steps,
+        ..Outcome::default()
+    };
+    for k in 0..steps {
+        let r = e.step();
+        if trace > 0 && (k % trace == 0 || r.error.is_some()) {
+            eprintln!(
+                "pile {n} step {k}: {:.2} ms, {} {} work, residual {:.1e}, lcp {}, active {}, pen {:.2e} m, ke {:.3e}, {}",
+                r.timings.total * 1e3,
+                r.solver,
+                r.pivots,
+                r.residual,
+                r.lcp_size,
+                r.active_contacts,
+                r.max_penetration,
+                r.energy.kinetic,
+                r.status()
+            );
+        }
+        if r.error.is_some() {
+            out.failed += 1;
+            break;
+        }
+        out.capped += u64::from(r.not_converged);
+        times.push(r.timings.total);
+        work.push(r.pivots);
+        out.worst_overlap = out.worst_overlap.max(r.max_penetration);
+        out.kinetic = r.energy.kinetic;
+    }
+    out.total = times.iter().sum();
+    times.sort_by(f64::total_cmp);
+    out.median_step = times.get(times.len() / 2).copied().unwrap_or(0.0);
+    work.sort_unstable();
+    out.median_work = work.get(work.len() / 2).copied().unwrap_or(0);
+    out.max_work = work.last().copied().unwrap_or(0);
+    let w = half_width(n);
+    out.escaped = e
+        .state()
+        .bodies
+        .iter()
+        .filter(|b| b.x.x.abs() > w || b.x.y.abs() > w || b.x.z < 0.0)
+        .count();
+    out.state_bytes_per_body = e.state().heap_bytes() as f64 / n as f64;
+    out
+}
+
+/// The table of [`run`]s.
+pub fn table(rows: &[Outcome], dt: f64, solver: &str) -> String {
+    let mut t = format!(
+        "Pile of spheres (r = {RADIUS} m, mu = 0.5), h = {dt}, n_d = 4, solver {solver}.\n\n\
+         | N | steps | failed | at cap | ms/step (median) | s total | work (median / max) | worst overlap (mm) | escaped | KE end (J) | state B/body |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n"
+    );
+    for o in rows {
+        t += &format!(
+            "| {} | {} | {} | {} | {:.3} | {:.2} | {} / {} | {:.3} | {} | {:.2e} | {:.0} |\n",
+            o.n,
+            o.steps,
+            o.failed,
+            o.capped,
+            o.median_step * 1e3,
+            o.total,
+            o.median_work,
+            o.max_work,
+            o.worst_overlap * 1e3,
+            o.escaped,
+            o.kinetic,
+            o.state_bytes_per_body
+        );
+    }
+    t
 }
 
 #[cfg(test)]

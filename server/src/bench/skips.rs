@@ -4,6 +4,7 @@
 //! skips must not change the answer).
 
 use crate::engine::model::Params;
+use crate::engine::solver::PgsParams;
 use crate::engine::{Engine, Model, Timings};
 use cosim_shared::{Scene, SolverChoice};
 use std::fmt::Write as _;
@@ -26,6 +27,9 @@ fn median(v: &mut [f64]) -> f64 {
 /// Runs `model` for `steps` steps.
 pub fn run(model: Model, steps: u64) -> Run {
     let mut e = Engine::new(model);
+    // The skips are compared at a tolerance far below the differences the
+    // test allows.
+    e.set_pgs_params(PgsParams::precise());
     let mut t: [Vec<f64>; 6] = Default::default();
     let mut positions = Vec::new();
     let mut failures = 0;
@@ -81,6 +85,8 @@ pub fn distance(a: &Run, b: &Run) -> f64 {
 pub fn per_step_difference(on: Model, off: Model, steps: u64) -> PerStep {
     let mut a = Engine::new(on);
     let mut b = Engine::new(off);
+    a.set_pgs_params(PgsParams::precise());
+    b.set_pgs_params(PgsParams::precise());
     let mut out = PerStep::default();
     for _ in 0..steps {
         b.set_state(a.state().clone());

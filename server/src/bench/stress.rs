@@ -6,6 +6,7 @@
 //! prints the table (`bench/results/stress.md`).
 
 use super::text::{joint, plane, sphere};
+use crate::engine::solver::PgsParams;
 use crate::engine::{Engine, Model, StepReport};
 use cosim_shared::{Scene, SolverChoice};
 use nalgebra::Vector3;
@@ -56,7 +57,10 @@ fn engine(toml: &str, solver: SolverChoice) -> Engine {
     // The cases' scenes are ours: a parse error is a bug here, not input.
     let mut scene = Scene::parse(toml, "<stress scene>").unwrap_or_else(|e| panic!("{e}"));
     scene.sim.solver = solver;
-    Engine::new(Model::from_scene(&scene))
+    let mut e = Engine::new(Model::from_scene(&scene));
+    // The suite asks for exact answers: PGS at the tolerance that gives them.
+    e.set_pgs_params(PgsParams::precise());
+    e
 }
 
 /// Steps `n` times (stops at the first failed step), calling `each` after
@@ -507,6 +511,7 @@ pub fn long_run(steps: u64, solver: SolverChoice) -> Outcome {
     };
     scene.sim.solver = solver;
     let mut e = Engine::new(Model::from_scene(&scene));
+    e.set_pgs_params(PgsParams::precise());
     let mut e0 = None;
     let mut emax = f64::NEG_INFINITY;
     let st = run(&mut e, steps, |_, rep| {

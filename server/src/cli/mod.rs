@@ -141,6 +141,36 @@ pub enum BenchWhat {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Piles of N spheres dropped into a box (issue 14): ms per step,
+    /// solver work, worst overlap, escaped spheres, energy, memory.
+    Pile {
+        /// Pile sizes, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "100,1000,4000,10000")]
+        n: Vec<usize>,
+        #[arg(long, default_value_t = 500)]
+        steps: u64,
+        #[arg(long, default_value_t = 0.01)]
+        dt: f64,
+        #[arg(long, default_value = "auto")]
+        solver: String,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Print every K-th step's report to stderr.
+        #[arg(long, default_value_t = 0)]
+        trace: u64,
+        /// PGS: stop when no update changes a velocity by more (m/s).
+        #[arg(long, default_value_t = crate::engine::solver::pgs::DEFAULT_VELOCITY_TOLERANCE)]
+        velocity_tolerance: f64,
+        /// PGS: sweep cap.
+        #[arg(long, default_value_t = crate::engine::solver::pgs::DEFAULT_MAX_ITERATIONS)]
+        max_iterations: usize,
+        /// PGS: plain sweeps, without the NNCG momentum step.
+        #[arg(long)]
+        no_momentum: bool,
+        /// Also write the table to this file.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Stress suite: mass ratios, a pile at rest, 100 m/s impacts,
     /// degenerate and overlapping contacts, redundant joints, a long run,
     /// radii from 1 mm to 10 m. Prints a table (also to --out).
@@ -371,6 +401,39 @@ pub fn main() -> ExitCode {
             let table = robust::run(scenes, steps, seed, solver)
                 .map(|s| robust::table(&s, steps, seed, solver));
             print_table("bench robust", table, out.as_deref())
+        }
+        Command::Bench {
+            what:
+                BenchWhat::Pile {
+                    n,
+                    steps,
+                    dt,
+                    solver,
+                    seed,
+                    trace,
+                    velocity_tolerance,
+                    max_iterations,
+                    no_momentum,
+                    out,
+                },
+        } => {
+            use crate::bench::pile;
+            let pgs = crate::engine::solver::PgsParams {
+                velocity_tolerance,
+                max_iterations,
+                momentum: !no_momentum,
+                ..Default::default()
+            };
+            let rows: Vec<_> = n
+                .iter()
+                .map(|&n| pile::run(n, dt, steps, &solver, pgs, seed, trace))
+                .collect();
+            let table = format!(
+                "# Pile\n\nMachine: {}.\n\n{}",
+                crate::bench::accuracy::machine(),
+                pile::table(&rows, dt, &solver)
+            );
+            print_table("bench pile", Ok(table), out.as_deref())
         }
         Command::Bench {
             what: BenchWhat::Skips { steps, out },
