@@ -290,18 +290,35 @@ impl Connection {
         req.node_id_lo = id as u64;
         req.node_id_hi = (id >> 64) as u64;
         req.pid = u64::from(std::process::id());
-        let pending = self
-            .control
-            .send_copy(req)
-            .map_err(|e| ipc("cannot send a control request")(&e))?;
-        // Waking the server is an optimisation: it also polls.
-        let _ = self.wake.notify();
-        if pending.number_of_server_connections() == 0 {
-            return Err(self.gone());
-        }
         let start = Instant::now();
         let mut check = GoneCheck::new();
+        // A request no server took (its buffer full, or the server between
+        // ports) is sent again while the server lives; only a server found
+        // gone by the two-check rule ends the exchange.
+        let pending = loop {
+            let pending = self
+                .control
+                .send_copy(req)
+                .map_err(|e| ipc("cannot send a control request")(&e))?;
+            // Waking the server is an optimisation: it also polls.
+            let _ = self.wake.notify();
+            if pending.number_of_server_connections() > 0 {
+                break pending;
+            }
+            if check.gone(start.elapsed(), || self.server_alive()) || start.elapsed() > timeout {
+                return Err(self.gone());
+            }
+            if self.node.wait(Duration::from_micros(50)).is_err() {
+                return Err(ClientError::Interrupted);
+            }
+        };
+        let mut check = GoneCheck::new();
         loop {
+            // NOTE: read whether the server still holds the request before
+            // draining: a server that answers and drops the request between
+            // a drain and the check leaves its answer in the buffer, and
+            // the drain after the check finds it.
+            let connected = pending.is_connected();
             while let Some(r) = pending
                 .receive()
                 .map_err(|e| ipc("cannot receive a control response")(&e))?
@@ -325,7 +342,7 @@ impl Connection {
             }
             // The server let the request go unanswered (it ended), or it
             // was killed with the request in its queue.
-            if !pending.is_connected() {
+            if !connected {
                 return Err(self.gone());
             }
             if check.gone(start.elapsed(), || self.server_alive()) {
