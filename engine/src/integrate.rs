@@ -42,6 +42,15 @@ pub fn positions(
 ) -> Result<(), usize> {
     poses.clear();
     for (i, b) in state.bodies.iter().enumerate() {
+        if state
+            .sleep_tag
+            .get(i)
+            .is_some_and(|&t| t != super::sleep::AWAKE)
+        {
+            // Asleep: the pose stays, to the bit (sleep.rs).
+            poses.push((b.x, b.q));
+            continue;
+        }
         let k = 6 * i;
         let v = Vector3::new(nu[k], nu[k + 1], nu[k + 2]);
         let w = Vector3::new(nu[k + 3], nu[k + 4], nu[k + 5]);
@@ -60,6 +69,13 @@ pub fn positions(
         poses.push((x, q));
     }
     for (i, (b, &(x, q))) in state.bodies.iter_mut().zip(poses.iter()).enumerate() {
+        if state
+            .sleep_tag
+            .get(i)
+            .is_some_and(|&t| t != super::sleep::AWAKE)
+        {
+            continue;
+        }
         let k = 6 * i;
         b.v = Vector3::new(nu[k], nu[k + 1], nu[k + 2]);
         b.w = Vector3::new(nu[k + 3], nu[k + 4], nu[k + 5]);

@@ -21,6 +21,8 @@ pub struct Islands {
     size: Vec<u32>,
     /// Whether a constraint touches the body (it is in an island).
     tied: Vec<bool>,
+    /// Per root: the least of a per-body count over its island (sleeping).
+    least: Vec<u32>,
 }
 
 /// How many islands, and the bodies of the largest.
@@ -81,6 +83,29 @@ impl Islands {
             }
         }
         out
+    }
+}
+
+impl Islands {
+    /// Keeps, for each island of the last partition (a body in none is an
+    /// island of its own), the least `count` of its bodies whose `tag` is
+    /// `only` (`sleep.rs`: the steps at rest of the awake bodies).
+    pub fn least_rest(&mut self, count: &[u32], tag: &[u32], only: u32) {
+        let n = self.parent.len();
+        self.least.clear();
+        self.least.resize(n, u32::MAX);
+        for i in 0..n {
+            if tag[i] == only {
+                let r = self.root(i);
+                self.least[r] = self.least[r].min(count[i]);
+            }
+        }
+    }
+
+    /// The root of body `i`'s island and the least count kept for it.
+    pub fn least_of(&mut self, i: usize) -> (usize, u32) {
+        let r = self.root(i);
+        (r, self.least[r])
     }
 }
 

@@ -25,6 +25,7 @@ pub mod project;
 pub mod prune;
 pub mod report;
 pub mod rows;
+pub mod sleep;
 pub mod solver;
 pub mod state;
 
@@ -180,6 +181,17 @@ impl Workspace {
         );
         self.detect(model, state);
         applied::inverse_masses(model, state, &mut self.minv);
+        // A sleeping body is static for the step: a late contact with an
+        // awake body (`sleep.rs`) cannot move it.
+        for (m, _) in self
+            .minv
+            .iter_mut()
+            .zip(&state.sleep_tag)
+            .filter(|(_, &t)| t != sleep::AWAKE)
+        {
+            m.inv_m = 0.0;
+            m.inv_i = nalgebra::Matrix3::zeros();
+        }
     }
 
     fn detect(&mut self, model: &Model, state: &State) {
@@ -194,6 +206,9 @@ impl Workspace {
         };
         collision::detect(model, state, listing, &mut self.collision, &mut self.geoms);
         contact::build(model, state, &self.geoms, &mut self.contacts);
+        if sleep::any_asleep(state) {
+            sleep::drop_sleeping(state, &mut self.contacts);
+        }
     }
 
     /// Grows the broad phase's reach where a body's speed bound `speed(i)`
@@ -246,6 +261,14 @@ impl Workspace {
     /// step's own.
     fn select(&mut self, model: &Model, state: &State, inputs: &Inputs) {
         applied::free_velocity(model, state, inputs, &self.minv, &mut self.nu_free);
+        for (i, _) in state
+            .sleep_tag
+            .iter()
+            .enumerate()
+            .filter(|(_, &t)| t != sleep::AWAKE)
+        {
+            self.nu_free[6 * i..6 * i + 6].fill(0.0);
+        }
         if self.widen(model, state, Speeds::Free) {
             // The contact indices changed: a matrix made for the old list
             // would be taken for the new one.
@@ -439,6 +462,14 @@ impl Engine {
         let _span = tracing::trace_span!("collision").entered();
         let ws = &mut self.ws;
         ws.contact_set(&self.model, &self.state);
+        // Islands an awake body touches wake; their own contacts were left
+        // out, so the set is listed again (each round can reach another
+        // sleeping island; at most one round per island).
+        if self.model.params.sleep.is_some() {
+            while sleep::wake_touched(&mut self.state, &ws.contacts) {
+                ws.contact_set(&self.model, &self.state);
+            }
+        }
         self.projected = match project::deep_penetration(
             &ws.contacts,
             &ws.minv,
@@ -466,6 +497,9 @@ impl Engine {
     /// The rest of the step, with the inputs as they are now. On failure the
     /// state is left unchanged and the report says why.
     pub fn finish(&mut self) -> StepReport {
+        if self.wake_on_inputs() {
+            self.prepared = false;
+        }
         self.prepare_contacts();
         let mut lap = Lap::start();
         let mut timings = Timings {
@@ -500,6 +534,7 @@ impl Engine {
             max_joint_error: 0.0,
             islands: 0,
             largest_island: 0,
+            sleeping: 0,
             energy: Default::default(),
             timings,
         };
@@ -539,6 +574,22 @@ impl Engine {
         let summary = self.partition();
         report.islands = summary.count;
         report.largest_island = summary.largest;
+        if let Some(params) = self.model.params.sleep {
+            let _span = tracing::trace_span!("sleep").entered();
+            sleep::update(
+                &self.model,
+                &params,
+                &mut self.state,
+                &self.ws.contacts,
+                &mut self.ws.islands,
+            );
+        }
+        report.sleeping = self
+            .state
+            .sleep_tag
+            .iter()
+            .filter(|&&t| t != sleep::AWAKE)
+            .count();
         report.active_contacts = self
             .ws
             .impulses
@@ -706,6 +757,21 @@ impl Engine {
                 return Ok(());
             }
         }
+    }
+
+    /// Wakes the sleeping islands that this step's body impulses push;
+    /// true when one woke (its contacts must then be listed).
+    fn wake_on_inputs(&mut self) -> bool {
+        if !sleep::any_asleep(&self.state) {
+            return false;
+        }
+        let mut woke = false;
+        for (i, (l, a)) in self.inputs.body_impulse.iter().enumerate() {
+            if *l != Vector3::zeros() || *a != Vector3::zeros() {
+                woke |= sleep::wake_body(&mut self.state, i);
+            }
+        }
+        woke
     }
 
     /// The islands of the step's final LCP: bodies tied by its contacts

@@ -102,6 +102,8 @@ pub struct Params {
     pub contact_compliance: Option<Compliance>,
     pub joint_compliance: Option<Compliance>,
     pub position_update: cosim_shared::PositionUpdate,
+    /// Sleeping islands at rest (`sleep.rs`); `None`: every body steps.
+    pub sleep: Option<super::sleep::Sleep>,
 }
 
 /// A spring of stiffness `k` (N/m) and a damper `c` (N s/m) along a
@@ -318,6 +320,11 @@ impl Model {
                     .map(Compliance::from),
                 joint_compliance: scene.compliance.and_then(|c| c.joint).map(Compliance::from),
                 position_update: s.position_update,
+                sleep: s.sleep.map(|d| super::sleep::Sleep {
+                    after: d.after,
+                    linear: d.linear_speed,
+                    angular: d.angular_speed,
+                }),
             },
             initial,
         }

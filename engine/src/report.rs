@@ -117,6 +117,8 @@ pub struct StepReport {
     /// step.
     pub islands: usize,
     pub largest_island: usize,
+    /// Bodies asleep after the step (`sleep.rs`).
+    pub sleeping: usize,
     /// Left-out contacts that the velocity check added back (re-solves).
     pub resolves: usize,
     /// The iterative solver stopped on its iteration cap, not its tolerance:

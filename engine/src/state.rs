@@ -34,6 +34,10 @@ pub struct State {
     /// positive. Part of the state for the same reason as the impulses.
     pub warm_lcp: Vec<(usize, bool)>,
     pub warm_active: Vec<bool>,
+    /// Sleeping (`sleep.rs`): per body, the steps it has been at rest, and
+    /// the tag of its sleeping island (`sleep::AWAKE` when awake).
+    pub rest: Vec<u32>,
+    pub sleep_tag: Vec<u32>,
 }
 
 /// One contact's impulses of the last step, by its identity
@@ -58,6 +62,7 @@ impl State {
             + self.warm_joint.capacity() * size_of::<f64>()
             + self.warm_lcp.capacity() * size_of::<(usize, bool)>()
             + self.warm_active.capacity() * size_of::<bool>()
+            + (self.rest.capacity() + self.sleep_tag.capacity()) * size_of::<u32>()
     }
 
     /// The last step's impulses of contact `id`, if it was in the LCP.
@@ -86,6 +91,8 @@ impl State {
             warm_joint: vec![0.0; 3 * model.joints.len()],
             warm_lcp: Vec::new(),
             warm_active: Vec::new(),
+            rest: vec![0; model.bodies.len()],
+            sleep_tag: vec![super::sleep::AWAKE; model.bodies.len()],
         }
     }
 }

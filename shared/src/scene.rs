@@ -183,6 +183,47 @@ pub struct SimDesc {
     /// "euler" (default) or "trapezoid".
     #[serde(default)]
     pub position_update: PositionUpdate,
+    /// `[sim.sleep]`: islands at rest leave the step until touched
+    /// (absent: every body steps, the default: sleeping freezes a body
+    /// whose speed is below a threshold, an approximation a scene opts in
+    /// to).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sleep: Option<SleepDesc>,
+}
+
+/// `[sim.sleep]`: Box2D's and Rapier's defaults scaled to metres.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SleepDesc {
+    /// Seconds an island must stay at rest before it sleeps.
+    #[serde(default = "default_sleep_after")]
+    pub after: f64,
+    /// Speed (m/s) below which a body is at rest.
+    #[serde(default = "default_sleep_linear")]
+    pub linear_speed: f64,
+    /// Angular speed (rad/s) below which a body is at rest.
+    #[serde(default = "default_sleep_angular")]
+    pub angular_speed: f64,
+}
+
+impl Default for SleepDesc {
+    fn default() -> Self {
+        SleepDesc {
+            after: default_sleep_after(),
+            linear_speed: default_sleep_linear(),
+            angular_speed: default_sleep_angular(),
+        }
+    }
+}
+
+fn default_sleep_after() -> f64 {
+    0.5
+}
+fn default_sleep_linear() -> f64 {
+    0.01
+}
+fn default_sleep_angular() -> f64 {
+    0.05
 }
 
 fn default_true() -> bool {
@@ -405,6 +446,11 @@ impl Scene {
         nonneg(sim.restitution_threshold)
             .map_err(|m| err("sim.restitution_threshold".into(), m))?;
         nonneg(sim.contact_margin).map_err(|m| err("sim.contact_margin".into(), m))?;
+        if let Some(sleep) = &sim.sleep {
+            nonneg(sleep.after).map_err(|m| err("sim.sleep.after".into(), m))?;
+            positive(sleep.linear_speed).map_err(|m| err("sim.sleep.linear_speed".into(), m))?;
+            positive(sleep.angular_speed).map_err(|m| err("sim.sleep.angular_speed".into(), m))?;
+        }
 
         // (name, field that first used it), to refuse duplicates by name.
         let mut names: Vec<(String, String)> = Vec::new();

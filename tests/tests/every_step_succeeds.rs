@@ -170,3 +170,33 @@ fn two_hundred_random_scenes_with_pgs_keep_their_energy() {
     assert!(s.worst_energy.0 <= 0.0, "{:?}", s.worst_energy);
     assert!(s.worst_speed.0 <= 0.0, "{:?}", s.worst_speed);
 }
+
+/// The random scenes with sleeping on, at thresholds that make it happen
+/// within their 20 steps (at rest below 0.5 m/s and 5 rad/s for one step):
+/// bodies fall asleep on impact, are woken by the next, and no step fails
+/// or breaks a bound, with either solver.
+#[test]
+fn random_scenes_that_sleep_and_wake_have_no_failed_step() {
+    let sleep = "[sim.sleep]\nafter = 0\nlinear_speed = 0.5\nangular_speed = 5\n\n";
+    for (solver, scenes) in [(SolverChoice::Lemke, 300u64), (SolverChoice::Pgs, 100)] {
+        let mut slept = 0;
+        for seed in 1..=scenes {
+            let text = robust::scene(seed);
+            let at = text.find("\n[[").expect("the scene has bodies") + 1;
+            let text = format!("{}{sleep}{}", &text[..at], &text[at..]);
+            let c = robust::check(&text, 20, solver).unwrap_or_else(|e| panic!("{e}\n{text}"));
+            assert_eq!(c.failures, 0, "seed {seed}: {:?}\n{text}", c.first_failure);
+            assert!(c.kinetic <= 0.0, "seed {seed}: kinetic {}", c.kinetic);
+            assert!(c.energy <= 0.0, "seed {seed}: energy {}", c.energy);
+            assert!(c.speed <= 0.0, "seed {seed}: speed {}", c.speed);
+            let scene = Scene::parse(&text, "<sleep>").unwrap();
+            let mut e = Engine::new(Model::from_scene(&scene));
+            slept += usize::from((0..20).any(|_| e.step().sleeping > 0));
+        }
+        eprintln!("{solver:?}: {slept} of {scenes} scenes slept");
+        assert!(
+            slept * 4 >= scenes as usize,
+            "{solver:?}: {slept} of {scenes} slept"
+        );
+    }
+}

@@ -100,3 +100,30 @@ fn the_broad_phase_allocates_nothing_after_warm_up() {
         );
     }
 }
+
+/// The same through sleeping (issue 14, point 4): a stack that falls
+/// asleep, is woken by a sphere dropped on it, and sleeps again; the
+/// second pass allocates nothing.
+#[test]
+fn sleeping_and_waking_allocate_nothing_after_warm_up() {
+    use cosim_server::bench::text::{plane, sphere};
+    let r = 0.1;
+    let text = format!(
+        "[sim]\nname = \"sleep\"\ndt = 0.001\nsteps = 10\nsolver = \"lemke\"\n\n[sim.sleep]\nafter = 0.1\n\n{}{}{}{}",
+        plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.5, 0.0),
+        sphere("bottom", r, 1.0, [0.0, 0.0, r], [0.0; 3], 0.5, 0.0),
+        sphere("top", r, 1.0, [0.0, 0.0, 3.0 * r], [0.0; 3], 0.5, 0.0),
+        sphere("faller", r, 1.0, [0.0, 0.0, 5.0 * r + 0.2], [0.0; 3], 0.5, 0.0),
+    );
+    let model = Model::from_scene(&cosim_shared::Scene::parse(&text, "<sleep>").unwrap());
+    let mut e = Engine::new(model.clone());
+    let (mut slept, mut woke) = (false, false);
+    for _ in 0..1500 {
+        let rep = e.step();
+        woke |= slept && rep.sleeping == 0;
+        slept |= rep.sleeping > 0;
+    }
+    assert!(slept && woke, "slept {slept}, woke {woke}");
+    let (made, _) = second_pass_allocations(model, 1500);
+    assert_eq!(made, 0, "{made} allocations in 1500 steps after warm-up");
+}

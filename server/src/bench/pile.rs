@@ -36,12 +36,28 @@ pub fn half_width(n: usize) -> f64 {
 /// The scene text of a pile of `n` spheres, with step `dt` and friction
 /// directions `nd`, solver `solver` (`"pgs"`, `"lemke"`, `"auto"`).
 pub fn text(n: usize, dt: f64, nd: usize, solver: &str, steps: u64, seed: u64) -> String {
+    text_with(n, dt, nd, solver, steps, seed, false)
+}
+
+/// [`text`], with sleeping at its default thresholds when `sleep`.
+pub fn text_with(
+    n: usize,
+    dt: f64,
+    nd: usize,
+    solver: &str,
+    steps: u64,
+    seed: u64,
+    sleep: bool,
+) -> String {
     let (side, _) = grid(n);
     let w = half_width(n);
     let mut rng = Rng::new(seed);
     let mut t = format!(
         "[sim]\nname = \"pile-{n}\"\ndt = {dt:e}\nsteps = {steps}\nfriction_directions = {nd}\nsolver = \"{solver}\"\n\n"
     );
+    if sleep {
+        t += "[sim.sleep]\n\n";
+    }
     t += &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.5, 0.0);
     for (i, (nx, ny)) in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
         .into_iter()
@@ -75,6 +91,20 @@ pub fn scene(n: usize, dt: f64, nd: usize, solver: &str, steps: u64, seed: u64) 
         .unwrap_or_else(|e| panic!("the pile scene is valid: {e}"))
 }
 
+/// How a pile is run (`bench pile`'s options).
+#[derive(Debug, Clone)]
+pub struct Settings {
+    pub dt: f64,
+    pub steps: u64,
+    pub solver: String,
+    pub pgs: PgsParams,
+    pub seed: u64,
+    /// Print every `trace`-th step's report (0: none).
+    pub trace: u64,
+    /// Islands at rest sleep (`[sim.sleep]` at its defaults).
+    pub sleep: bool,
+}
+
 /// One pile run's figures (`bench pile`).
 #[derive(Debug, Clone, Default)]
 pub struct Outcome {
@@ -98,21 +128,24 @@ pub struct Outcome {
     pub kinetic: f64,
     /// The state's heap bytes per body at the end.
     pub state_bytes_per_body: f64,
+    /// Bodies asleep at the end.
+    pub asleep: usize,
 }
 
-/// Runs the pile of `n` spheres for `steps` steps of `dt` with `solver`;
-/// `trace` prints every `trace`-th step's report (0: none).
-pub fn run(
-    n: usize,
-    dt: f64,
-    steps: u64,
-    solver: &str,
-    pgs: PgsParams,
-    seed: u64,
-    trace: u64,
-) -> Outcome {
+/// Runs the pile of `n` spheres as `settings` say.
+pub fn run(n: usize, settings: &Settings) -> Outcome {
     use crate::engine::{Engine, Model};
-    let scene = scene(n, dt, 4, solver, steps, seed);
+    let Settings {
+        dt,
+        steps,
+        ref solver,
+        pgs,
+        seed,
+        trace,
+        sleep,
+    } = *settings;
+    let scene = Scene::parse(&text_with(n, dt, 4, solver, steps, seed, sleep), "<pile>")
+        .unwrap_or_else(|e| panic!("the pile scene is valid: {e}"));
     let mut e = Engine::new(Model::from_scene(&scene));
     e.set_pgs_params(pgs);
     let mut times = Vec::with_capacity(steps as usize);
@@ -126,7 +159,7 @@ pub fn run(
         let r = e.step();
         if trace > 0 && (k % trace == 0 || r.error.is_some()) {
             eprintln!(
-                "pile {n} step {k}: {:.2} ms, {} {} work, residual {:.1e}, lcp {}, active {}, pen {:.2e} m, ke {:.3e}, {}",
+                "pile {n} step {k}: {:.2} ms, {} {} work, residual {:.1e}, lcp {}, active {}, pen {:.2e} m, ke {:.3e}, asleep {}, {}",
                 r.timings.total * 1e3,
                 r.solver,
                 r.pivots,
@@ -135,6 +168,7 @@ pub fn run(
                 r.active_contacts,
                 r.max_penetration,
                 r.energy.kinetic,
+                r.sleeping,
                 r.status()
             );
         }
@@ -147,6 +181,7 @@ pub fn run(
         work.push(r.pivots);
         out.worst_overlap = out.worst_overlap.max(r.max_penetration);
         out.kinetic = r.energy.kinetic;
+        out.asleep = r.sleeping;
     }
     out.total = times.iter().sum();
     times.sort_by(f64::total_cmp);
@@ -166,15 +201,21 @@ pub fn run(
 }
 
 /// The table of [`run`]s.
-pub fn table(rows: &[Outcome], dt: f64, solver: &str) -> String {
+pub fn table(rows: &[Outcome], settings: &Settings) -> String {
+    let (dt, solver) = (settings.dt, &settings.solver);
+    let sleep = if settings.sleep {
+        "sleeping on"
+    } else {
+        "sleeping off"
+    };
     let mut t = format!(
-        "Pile of spheres (r = {RADIUS} m, mu = 0.5), h = {dt}, n_d = 4, solver {solver}.\n\n\
-         | N | steps | failed | at cap | ms/step (median) | s total | work (median / max) | worst overlap (mm) | escaped | KE end (J) | state B/body |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|\n"
+        "Pile of spheres (r = {RADIUS} m, mu = 0.5), h = {dt}, n_d = 4, solver {solver}, {sleep}.\n\n\
+         | N | steps | failed | at cap | ms/step (median) | s total | work (median / max) | worst overlap (mm) | escaped | KE end (J) | asleep | state B/body |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n"
     );
     for o in rows {
         t += &format!(
-            "| {} | {} | {} | {} | {:.3} | {:.2} | {} / {} | {:.3} | {} | {:.2e} | {:.0} |\n",
+            "| {} | {} | {} | {} | {:.3} | {:.2} | {} / {} | {:.3} | {} | {:.2e} | {} | {:.0} |\n",
             o.n,
             o.steps,
             o.failed,
@@ -186,6 +227,7 @@ pub fn table(rows: &[Outcome], dt: f64, solver: &str) -> String {
             o.worst_overlap * 1e3,
             o.escaped,
             o.kinetic,
+            o.asleep,
             o.state_bytes_per_body
         );
     }

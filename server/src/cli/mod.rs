@@ -167,6 +167,9 @@ pub enum BenchWhat {
         /// PGS: plain sweeps, without the NNCG momentum step.
         #[arg(long)]
         no_momentum: bool,
+        /// Islands at rest sleep (the scene's `[sim.sleep]` at its defaults).
+        #[arg(long)]
+        sleep: bool,
         /// Also write the table to this file.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -414,24 +417,30 @@ pub fn main() -> ExitCode {
                     velocity_tolerance,
                     max_iterations,
                     no_momentum,
+                    sleep,
                     out,
                 },
         } => {
             use crate::bench::pile;
-            let pgs = crate::engine::solver::PgsParams {
-                velocity_tolerance,
-                max_iterations,
-                momentum: !no_momentum,
-                ..Default::default()
+            let settings = pile::Settings {
+                dt,
+                steps,
+                solver,
+                pgs: crate::engine::solver::PgsParams {
+                    velocity_tolerance,
+                    max_iterations,
+                    momentum: !no_momentum,
+                    ..Default::default()
+                },
+                seed,
+                trace,
+                sleep,
             };
-            let rows: Vec<_> = n
-                .iter()
-                .map(|&n| pile::run(n, dt, steps, &solver, pgs, seed, trace))
-                .collect();
+            let rows: Vec<_> = n.iter().map(|&n| pile::run(n, &settings)).collect();
             let table = format!(
                 "# Pile\n\nMachine: {}.\n\n{}",
                 crate::bench::accuracy::machine(),
-                pile::table(&rows, dt, &solver)
+                pile::table(&rows, &settings)
             );
             print_table("bench pile", Ok(table), out.as_deref())
         }

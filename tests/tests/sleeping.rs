@@ -1,0 +1,158 @@
+//! Sleeping (issue 14, point 4; `engine/src/sleep.rs`): an island at rest
+//! sleeps and its state stays to the bit; an impulse, or an awake body
+//! that comes into contact, wakes it in the same step; a run restored from
+//! a snapshot repeats the original's bits through sleeping and waking.
+
+use cosim_server::bench::text::{plane, sphere};
+use cosim_server::engine::{BodyState, Engine, Model};
+use nalgebra::Vector3;
+
+const R: f64 = 0.1;
+
+/// A floor; a stack of two (bodies 0, 1), a sphere alone (2), and a sphere
+/// (3) held in flight by its height: it falls onto the stack's top after
+/// `drop` metres of free fall (or far away when `drop` is None).
+fn scene(drop: Option<f64>, sleep: &str) -> Model {
+    let (x3, z3) = match drop {
+        Some(d) => (0.0, 4.0 * R + R + d),
+        None => (5.0, 50.0),
+    };
+    let text = format!(
+        "[sim]\nname = \"sleep\"\ndt = 0.001\nsteps = 10\nsolver = \"lemke\"\n\n{sleep}\n{}{}{}{}{}",
+        plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.5, 0.0),
+        sphere("bottom", R, 1.0, [0.0, 0.0, R], [0.0; 3], 0.5, 0.0),
+        sphere("top", R, 1.0, [0.0, 0.0, 3.0 * R], [0.0; 3], 0.5, 0.0),
+        sphere("alone", R, 1.0, [1.0, 0.0, R], [0.0; 3], 0.5, 0.0),
+        sphere("faller", R, 1.0, [x3, 0.0, z3], [0.0; 3], 0.5, 0.0),
+    );
+    Model::from_scene(&cosim_shared::Scene::parse(&text, "<sleep>").unwrap())
+}
+
+const SLEEP: &str = "[sim.sleep]\nafter = 0.1\n";
+
+fn run_until_asleep(e: &mut Engine, bodies: usize) -> u64 {
+    for _ in 0..2000 {
+        let r = e.step();
+        assert!(r.ok(), "{r:?}");
+        if r.sleeping == bodies {
+            return r.step;
+        }
+    }
+    panic!("{bodies} bodies never slept");
+}
+
+#[test]
+fn an_island_at_rest_sleeps_and_its_state_stays_to_the_bit() {
+    let mut e = Engine::new(scene(None, SLEEP));
+    // The stack and the lone sphere rest from the start: after `after`
+    // (100 steps) and the first steps' settling, they sleep; the faller
+    // does not.
+    let slept = run_until_asleep(&mut e, 3);
+    assert!((100..400).contains(&slept), "slept at step {slept}");
+    let before: Vec<BodyState> = e.state().bodies.clone();
+    for _ in 0..1000 {
+        let r = e.step();
+        assert!(r.ok(), "{r:?}");
+        assert_eq!(r.sleeping, 3, "{r:?}");
+        // Only the faller is simulated: nothing of the sleepers is listed.
+        assert_eq!(r.lcp_size, 0, "{r:?}");
+    }
+    for (i, (now, was)) in e.state().bodies.iter().zip(&before).take(3).enumerate() {
+        assert_eq!(now, was, "body {i} moved asleep");
+        assert_eq!(now.v, Vector3::zeros());
+    }
+    // The faller fell all along.
+    assert!(e.state().bodies[3].v.z < -10.0, "{:?}", e.state().bodies[3]);
+}
+
+#[test]
+fn without_sleep_nothing_sleeps() {
+    let mut e = Engine::new(scene(None, ""));
+    for _ in 0..500 {
+        let r = e.step();
+        assert!(r.ok() && r.sleeping == 0, "{r:?}");
+    }
+}
+
+#[test]
+fn an_impulse_wakes_its_island_in_the_same_step_and_not_the_others() {
+    let mut e = Engine::new(scene(None, SLEEP));
+    run_until_asleep(&mut e, 3);
+    let top = e.state().bodies[1];
+    // Straight up: it hops and lands back on the bottom sphere, centred.
+    e.add_body_impulse(1, Vector3::new(0.0, 0.0, 0.2), Vector3::zeros())
+        .unwrap();
+    let r = e.step();
+    assert!(r.ok(), "{r:?}");
+    // The stack woke (both bodies), the lone sphere did not.
+    assert_eq!(r.sleeping, 1, "{r:?}");
+    let now = e.state().bodies[1];
+    assert!(now.v.z > 0.1, "the impulse moved the top at once: {now:?}");
+    assert!(now.x.z > top.x.z);
+    // And it went back to sleep once at rest again.
+    let slept = run_until_asleep(&mut e, 3);
+    assert!(slept > r.step);
+}
+
+#[test]
+fn a_falling_sphere_wakes_the_stack_it_lands_on() {
+    // 0.2 m of free fall onto the sleeping stack (asleep from step ~100;
+    // the faller reaches it at t = sqrt(2 * 0.2 / g) = 0.2 s).
+    let mut e = Engine::new(scene(Some(0.2), SLEEP));
+    let mut woke = None;
+    let mut slept_before = false;
+    for _ in 0..600 {
+        let r = e.step();
+        assert!(r.ok(), "{r:?}");
+        slept_before |= r.sleeping >= 2;
+        if slept_before && woke.is_none() && r.sleeping <= 1 {
+            woke = Some(r.step);
+        }
+        // The faller never sinks into the top sphere: it was awake to
+        // take the impact, or static, never passed through.
+        assert!(r.max_penetration < 1e-3, "{r:?}");
+    }
+    assert!(slept_before, "the stack never slept before the impact");
+    let woke = woke.expect("the stack never woke");
+    // Woken at the contact, by 0.2 s of fall (step 200) plus the margin.
+    assert!((150..260).contains(&woke), "woke at step {woke}");
+    // The impact pushed the stack: the top sphere took part.
+    let top = e.state().bodies[1];
+    assert!(top.x.z < 3.0 * R + 1e-3, "{top:?}");
+}
+
+#[test]
+fn a_restored_snapshot_repeats_sleeping_and_waking_to_the_bit() {
+    let push = |e: &mut Engine, k: u64| {
+        if k == 700 {
+            e.add_body_impulse(2, Vector3::new(0.0, 0.3, 0.0), Vector3::zeros())
+                .unwrap();
+        }
+    };
+    let mut a = Engine::new(scene(Some(0.2), SLEEP));
+    let mut snapshot = None;
+    for k in 0..1200 {
+        if k == 450 {
+            snapshot = Some(a.state().clone());
+        }
+        push(&mut a, k);
+        assert!(a.step().ok());
+    }
+    let mut b = Engine::new(scene(Some(0.2), SLEEP));
+    b.set_state(snapshot.unwrap());
+    for k in 450..1200 {
+        push(&mut b, k);
+        assert!(b.step().ok());
+    }
+    assert_eq!(a.state(), b.state());
+}
+
+#[test]
+fn a_bad_sleep_threshold_is_named() {
+    let text = "[sim]\ndt = 0.001\nsteps = 1\n[sim.sleep]\nlinear_speed = 0\n";
+    let e = cosim_shared::Scene::parse(text, "bad.toml").unwrap_err();
+    assert!(e.to_string().contains("sim.sleep.linear_speed"), "{e}");
+    let text = "[sim]\ndt = 0.001\nsteps = 1\n[sim.sleep]\nafter_s = 1\n";
+    let e = cosim_shared::Scene::parse(text, "bad.toml").unwrap_err();
+    assert!(e.to_string().contains("after_s"), "{e}");
+}
