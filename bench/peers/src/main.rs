@@ -6,6 +6,7 @@
 //! step calls only.
 
 mod mujoco;
+mod pile;
 mod rapier;
 
 use clap::Parser;
@@ -29,10 +30,76 @@ struct Args {
     /// Python with the `mujoco` package (skipped when it does not import).
     #[arg(long, default_value = "python3")]
     python: String,
+    /// Instead of the cases: the pile of issue 14 at these sizes, ours
+    /// and Rapier (1, 4, 8, 16 iterations; sleeping on and off).
+    #[arg(long, value_delimiter = ',')]
+    pile: Vec<usize>,
+    /// Steps of each pile run.
+    #[arg(long, default_value_t = 500)]
+    pile_steps: u64,
+    /// Our engine runs the piles up to this size only (at 1,000 spheres
+    /// our settling steps take seconds each).
+    #[arg(long, default_value_t = 100)]
+    ours_up_to: usize,
+    /// Also write the pile table to this file.
+    #[arg(long)]
+    pile_out: Option<PathBuf>,
+}
+
+fn piles(args: &Args) -> ExitCode {
+    use cosim_server::bench::pile::Settings;
+    let settings = Settings {
+        dt: 0.01,
+        steps: args.pile_steps,
+        solver: "pgs".into(),
+        pgs: Default::default(),
+        seed: 1,
+        trace: 0,
+        sleep: false,
+    };
+    let mut rows = Vec::new();
+    for &n in &args.pile {
+        if n <= args.ours_up_to {
+            for sleep in [false, true] {
+                let r = pile::ours(
+                    n,
+                    &Settings {
+                        sleep,
+                        ..settings.clone()
+                    },
+                );
+                eprintln!("{r:?}");
+                rows.push(r);
+            }
+        }
+        for sleep in [false, true] {
+            for iterations in [1, 4, 8, 16] {
+                let r = pile::rapier(n, &settings, iterations, sleep);
+                eprintln!("{r:?}");
+                rows.push(r);
+            }
+        }
+    }
+    let table = format!(
+        "# Pile, ours and Rapier\n\nMachine: {}.\n\n{}",
+        accuracy::machine(),
+        pile::table(&rows, &settings)
+    );
+    println!("{table}");
+    if let Some(path) = &args.pile_out {
+        if let Err(e) = std::fs::write(path, &table) {
+            eprintln!("error: cannot write {}: {e}", path.display());
+            return ExitCode::FAILURE;
+        }
+    }
+    ExitCode::SUCCESS
 }
 
 fn main() -> ExitCode {
     let args = Args::parse();
+    if !args.pile.is_empty() {
+        return piles(&args);
+    }
     let mut sweep = if args.quick {
         Sweep::quick()
     } else {

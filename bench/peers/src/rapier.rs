@@ -14,15 +14,17 @@ fn vec3(a: [f64; 3]) -> Vector {
     Vector::new(a[0], a[1], a[2])
 }
 
-struct World {
-    world: PhysicsWorld,
-    bodies: Vec<(RigidBodyHandle, ColliderHandle)>,
+pub(crate) struct World {
+    pub(crate) world: PhysicsWorld,
+    pub(crate) bodies: Vec<(RigidBodyHandle, ColliderHandle)>,
     planes: Vec<ColliderHandle>,
     names: Vec<String>,
     plane_names: Vec<String>,
 }
 
-fn build(scene: &Scene) -> World {
+/// The scene as a Rapier user would build it; `sleep`: Rapier's own
+/// sleeping (its default) on every body, else off.
+pub(crate) fn build(scene: &Scene, sleep: bool) -> World {
     let mut world = PhysicsWorld {
         gravity: vec3(scene.sim.gravity),
         ..PhysicsWorld::default()
@@ -59,7 +61,7 @@ fn build(scene: &Scene) -> World {
             .rotation(Rotation::from_xyzw(q[1], q[2], q[3], q[0]).to_scaled_axis())
             .linvel(vec3(b.velocity))
             .angvel(vec3(b.angular_velocity))
-            .can_sleep(false);
+            .can_sleep(sleep);
         let c = ColliderBuilder::ball(b.radius)
             .mass(b.mass)
             .friction(b.friction)
@@ -152,7 +154,7 @@ pub fn run(case: CaseId, h: f64, reference: Option<&Trajectory>) -> Vec<Point> {
     };
     let steps = scene.step_count();
     let mut scorer = Scorer::new(case, &scene, reference.cloned());
-    let mut w = build(&scene);
+    let mut w = build(&scene, false);
     let mut s = Sample::default();
     let mut elapsed = 0.0;
     let mut failure = None;
@@ -171,7 +173,7 @@ pub fn run(case: CaseId, h: f64, reference: Option<&Trajectory>) -> Vec<Point> {
         elapsed
     } else {
         median_run_time(elapsed, || {
-            let mut w = build(&scene);
+            let mut w = build(&scene, false);
             let t0 = Instant::now();
             for _ in 0..steps {
                 w.world.step();
