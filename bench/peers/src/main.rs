@@ -44,6 +44,10 @@ struct Args {
     /// Also write the pile table to this file.
     #[arg(long)]
     pile_out: Option<PathBuf>,
+    /// Draw the pile figures again from a table written by --pile-out,
+    /// without running the piles.
+    #[arg(long)]
+    pile_from: Option<PathBuf>,
 }
 
 fn piles(args: &Args) -> ExitCode {
@@ -86,6 +90,17 @@ fn piles(args: &Args) -> ExitCode {
         pile::table(&rows, &settings)
     );
     println!("{table}");
+    match pile::figures(&rows, &args.out, &accuracy::machine()) {
+        Ok(files) => {
+            for f in files {
+                println!("wrote {}", f.display());
+            }
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    }
     if let Some(path) = &args.pile_out {
         if let Err(e) = std::fs::write(path, &table) {
             eprintln!("error: cannot write {}: {e}", path.display());
@@ -97,6 +112,24 @@ fn piles(args: &Args) -> ExitCode {
 
 fn main() -> ExitCode {
     let args = Args::parse();
+    if let Some(path) = &args.pile_from {
+        let rows = std::fs::read_to_string(path)
+            .map_err(|e| e.to_string())
+            .and_then(|t| pile::parse_table(&t));
+        let drawn = rows.and_then(|rows| pile::figures(&rows, &args.out, &accuracy::machine()));
+        return match drawn {
+            Ok(files) => {
+                for f in files {
+                    println!("wrote {}", f.display());
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {}: {e}", path.display());
+                ExitCode::FAILURE
+            }
+        };
+    }
     if !args.pile.is_empty() {
         return piles(&args);
     }

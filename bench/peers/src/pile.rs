@@ -149,3 +149,233 @@ pub fn table(rows: &[Row], settings: &Settings) -> String {
     }
     t
 }
+
+/// Mean milliseconds per step of a row: the total over the steps, which
+/// the fit of cost against N needs (a median hides the settling steps).
+fn mean_ms(r: &Row) -> f64 {
+    1e3 * r.total_s / r.steps.max(1) as f64
+}
+
+/// The least-squares slope of `ln y` against `ln x`, if two sizes or more.
+pub fn slope(points: &[(f64, f64)]) -> Option<f64> {
+    if points.len() < 2 {
+        return None;
+    }
+    let n = points.len() as f64;
+    let (lx, ly): (Vec<f64>, Vec<f64>) = points.iter().map(|&(x, y)| (x.ln(), y.ln())).unzip();
+    let (mx, my) = (lx.iter().sum::<f64>() / n, ly.iter().sum::<f64>() / n);
+    let sxy: f64 = lx.iter().zip(&ly).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = lx.iter().map(|x| (x - mx).powi(2)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+/// The curves of the rows: one per engine and setting, points by N.
+fn curves(rows: &[Row]) -> Vec<(String, Vec<&Row>)> {
+    let mut out: Vec<(String, Vec<&Row>)> = Vec::new();
+    for r in rows {
+        let key = format!("{}: {}", r.engine, r.setting);
+        match out.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, v)) => v.push(r),
+            None => out.push((key, vec![r])),
+        }
+    }
+    for (_, v) in &mut out {
+        v.sort_by_key(|r| r.n);
+    }
+    out
+}
+
+/// Log-axis bounds with a factor 2 of margin.
+fn bounds(v: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = v
+        .filter(|x| *x > 0.0 && x.is_finite())
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        });
+    if !(lo.is_finite() && hi > 0.0) {
+        return (1e-3, 1.0);
+    }
+    (lo / 2.0, hi * 2.0)
+}
+
+/// A log axis' tick label only at 1, 2 and 5 times a power of ten: at
+/// every tick the labels run into each other ("9001000").
+fn sparse(x: f64, label: impl Fn(f64) -> String) -> String {
+    let mantissa = x / 10f64.powf(x.log10().floor());
+    if [1.0, 2.0, 5.0].iter().any(|m| (mantissa - m).abs() < 1e-6) {
+        label(x)
+    } else {
+        String::new()
+    }
+}
+
+/// Overlaps below this (mm) sit on the axis floor.
+const OVERLAP_FLOOR: f64 = 1e-5;
+
+/// `pile-time.png` (mean time per step against N, log-log, the fitted
+/// slope in each legend entry) and `pile-work-precision.png` (worst overlap
+/// against mean time per step, each point labelled with its N) in `dir`.
+/// Lines are one pixel wide: wider ones leave the plotting area in
+/// plotters 0.3 (its issue 549). The legends sit in the corner the data
+/// leave empty (cost grows with N; our overlaps are the smallest), so
+/// that no point hides behind them.
+pub fn figures(
+    rows: &[Row],
+    dir: &std::path::Path,
+    machine: &str,
+) -> Result<Vec<std::path::PathBuf>, String> {
+    use cosim_server::plot::{color, ensure_font, FONT};
+    use plotters::prelude::*;
+    ensure_font().map_err(|e| e.to_string())?;
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let curves = curves(rows);
+    let time = dir.join("pile-time.png");
+    let precision = dir.join("pile-work-precision.png");
+    let draw_time = || -> Result<(), Box<dyn std::error::Error>> {
+        let root = BitMapBackend::new(&time, (1100, 720)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let (x0, x1) = bounds(rows.iter().map(|r| r.n as f64));
+        let (y0, y1) = bounds(rows.iter().map(mean_ms));
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!("Pile: time per step against N ({machine})"),
+                (FONT, 20),
+            )
+            .margin(15)
+            .x_label_area_size(50)
+            .y_label_area_size(80)
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+        chart
+            .configure_mesh()
+            .x_desc("spheres N")
+            .y_desc("mean wall time per step (ms), one thread")
+            .label_style((FONT, 14))
+            .axis_desc_style((FONT, 15))
+            .x_label_formatter(&|x| sparse(*x, |x| format!("{x:.0}")))
+            .y_label_formatter(&|y| sparse(*y, |y| format!("{y:.0e}")))
+            .draw()?;
+        for (i, (key, pts)) in curves.iter().enumerate() {
+            let c = color(i);
+            let line: Vec<(f64, f64)> = pts.iter().map(|r| (r.n as f64, mean_ms(r))).collect();
+            let fit = slope(&line).map_or("one size".to_string(), |s| format!("slope {s:.2}"));
+            chart
+                .draw_series(LineSeries::new(line.clone(), c.stroke_width(1)))?
+                .label(format!("{key} ({fit})"))
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1))
+                });
+            chart.draw_series(line.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK.mix(0.4))
+            .label_font((FONT, 12))
+            .position(SeriesLabelPosition::LowerRight)
+            .draw()?;
+        root.present()?;
+        Ok(())
+    };
+    draw_time().map_err(|e| format!("{}: {e}", time.display()))?;
+    let draw_precision = || -> Result<(), Box<dyn std::error::Error>> {
+        let root = BitMapBackend::new(&precision, (1100, 720)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let (x0, x1) = bounds(rows.iter().map(mean_ms));
+        let (y0, y1) = bounds(
+            rows.iter()
+                .map(|r| (r.worst_overlap * 1e3).max(OVERLAP_FLOOR)),
+        );
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!("Pile: worst overlap against time per step ({machine})"),
+                (FONT, 20),
+            )
+            .margin(15)
+            .x_label_area_size(50)
+            .y_label_area_size(80)
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+        chart
+            .configure_mesh()
+            .x_desc("mean wall time per step (ms), one thread")
+            .y_desc("worst overlap over the run (mm)")
+            .label_style((FONT, 14))
+            .axis_desc_style((FONT, 15))
+            .x_label_formatter(&|x| sparse(*x, |x| format!("{x:.0e}")))
+            .y_label_formatter(&|y| sparse(*y, |y| format!("{y:.0e}")))
+            .draw()?;
+        for (i, (key, pts)) in curves.iter().enumerate() {
+            let c = color(i);
+            chart
+                .draw_series(pts.iter().map(|r| {
+                    let p = (mean_ms(r), (r.worst_overlap * 1e3).max(OVERLAP_FLOOR));
+                    EmptyElement::at(p)
+                        + Circle::new((0, 0), 5, c.filled())
+                        + Text::new(format!("N={}", r.n), (7, -7), (FONT, 11))
+                }))?
+                .label(key.clone())
+                .legend(move |(x, y)| Circle::new((x + 10, y), 5, c.filled()));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK.mix(0.4))
+            .label_font((FONT, 12))
+            .position(SeriesLabelPosition::LowerLeft)
+            .draw()?;
+        root.present()?;
+        Ok(())
+    };
+    draw_precision().map_err(|e| format!("{}: {e}", precision.display()))?;
+    Ok(vec![time, precision])
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_slope_of_a_power_law_is_its_exponent() {
+        let pts: Vec<(f64, f64)> = [100.0, 1000.0, 4000.0]
+            .iter()
+            .map(|&n: &f64| (n, 3.0 * n.powf(1.1)))
+            .collect();
+        assert!((super::slope(&pts).unwrap() - 1.1).abs() < 1e-12);
+        assert_eq!(super::slope(&pts[..1]), None);
+    }
+}
+
+/// The rows of a table that [`table`] wrote (`--pile-from`), to draw the
+/// figures again without running the piles.
+pub fn parse_table(text: &str) -> Result<Vec<Row>, String> {
+    let mut rows = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        let cells: Vec<&str> = line
+            .trim()
+            .trim_matches('|')
+            .split('|')
+            .map(str::trim)
+            .collect();
+        if cells.len() != 10 || cells[0] == "engine" || cells[0].starts_with("---") {
+            continue;
+        }
+        let num = |i: usize| -> Result<f64, String> {
+            cells[i]
+                .parse::<f64>()
+                .map_err(|e| format!("line {}: column {}: {:?}: {e}", k + 1, i + 1, cells[i]))
+        };
+        rows.push(Row {
+            engine: cells[0].to_string(),
+            setting: cells[1].to_string(),
+            n: num(2)? as usize,
+            steps: num(3)? as u64,
+            median_ms: num(4)?,
+            total_s: num(5)?,
+            worst_overlap: num(6)? * 1e-3,
+            escaped: num(7)? as usize,
+            kinetic: num(8)?,
+            asleep: num(9)? as usize,
+        });
+    }
+    if rows.is_empty() {
+        return Err("no pile rows in the table".into());
+    }
+    Ok(rows)
+}
