@@ -145,6 +145,9 @@ struct Workspace {
     collision: collision::Scratch,
     reach: Vec<f64>,
     kept: Vec<(usize, bool)>,
+    /// The warm starts of sleeping islands' contacts, kept while they are
+    /// not listed (`record_impulses`).
+    sleeping_warm: Vec<WarmContact>,
     islands: island::Islands,
     /// Lemke's guess for this step's LCP (see `carry_guess`), and its
     /// friction blocks as `(slack, first row, n_d)`.
@@ -842,6 +845,22 @@ impl Engine {
         self.state
             .warm_active
             .extend(m.z[..m.lcp_size()].iter().map(|&x| x > 0.0));
+        // A sleeping island's contacts are not listed: their warm starts
+        // stay (ascending id), merged back below, so that a woken island
+        // starts from its impulses, not from zero.
+        ws.sleeping_warm.clear();
+        if sleep::any_asleep(&self.state) {
+            let (model, state) = (&self.model, &self.state);
+            ws.sleeping_warm
+                .extend(state.warm_contacts.iter().filter(|w| {
+                    let (a, b) = model.contact_bodies(w.id);
+                    sleep::asleep(state, a)
+                        && match b {
+                            Counterpart::Body(j) => sleep::asleep(state, j),
+                            Counterpart::Plane(_) => true,
+                        }
+                }));
+        }
         // Filled below in the LCP's contact order, which is ascending id.
         self.state.warm_contacts.clear();
         for (j, joint) in self.model.joints.iter().enumerate() {
@@ -897,6 +916,13 @@ impl Engine {
                 normal: m.z[i],
                 friction: p,
             });
+        }
+        if !ws.sleeping_warm.is_empty() {
+            let warm = &mut self.state.warm_contacts;
+            warm.extend_from_slice(&ws.sleeping_warm);
+            // Distinct ids (a listed contact has an awake body); unstable:
+            // it sorts in place, without a buffer.
+            warm.sort_unstable_by_key(|w| w.id);
         }
     }
 

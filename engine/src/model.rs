@@ -330,9 +330,6 @@ impl Model {
         }
     }
 
-    /// Number of potential contacts: every sphere against every plane and,
-    /// unless `sphere_contacts` is off, every other sphere (7 in the
-    /// reference scene).
     /// The canonical index of the potential contact of body `a` with `b`:
     /// its place in the full enumeration (sphere-plane body-major, then the
     /// sphere pairs `a < b` in order), which identifies it from step to step
@@ -347,6 +344,30 @@ impl Model {
         }
     }
 
+    /// The bodies of contact `id`: the inverse of [`Model::contact_id`].
+    pub fn contact_bodies(&self, id: usize) -> (usize, Counterpart) {
+        let (n, np) = (self.bodies.len(), self.planes.len());
+        if id < n * np {
+            return (id / np, Counterpart::Plane(id % np));
+        }
+        // The row a of pair k: the last a with a (2n - a - 1) / 2 <= k.
+        let k = id - n * np;
+        let before = |a: usize| a * (2 * n - a - 1) / 2;
+        let (mut lo, mut hi) = (0, n.saturating_sub(1));
+        while lo < hi {
+            let mid = (lo + hi).div_ceil(2);
+            if before(mid) <= k {
+                lo = mid;
+            } else {
+                hi = mid - 1;
+            }
+        }
+        (lo, Counterpart::Body(lo + 1 + k - before(lo)))
+    }
+
+    /// Number of potential contacts: every sphere against every plane and,
+    /// unless `sphere_contacts` is off, every other sphere (7 in the
+    /// reference scene).
     pub fn potential_contacts(&self) -> usize {
         let n = self.bodies.len();
         let pairs = if self.params.sphere_contacts {

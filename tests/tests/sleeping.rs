@@ -156,3 +156,57 @@ fn a_bad_sleep_threshold_is_named() {
     let e = cosim_shared::Scene::parse(text, "bad.toml").unwrap_err();
     assert!(e.to_string().contains("after_s"), "{e}");
 }
+
+#[test]
+fn contact_ids_name_their_bodies_back() {
+    use cosim_server::engine::collision::Counterpart;
+    let m = scene(None, SLEEP);
+    let n = m.bodies.len();
+    for a in 0..n {
+        for p in 0..m.planes.len() {
+            let b = Counterpart::Plane(p);
+            assert_eq!(m.contact_bodies(m.contact_id(a, b)), (a, b));
+        }
+        for j in a + 1..n {
+            let b = Counterpart::Body(j);
+            assert_eq!(m.contact_bodies(m.contact_id(a, b)), (a, b));
+        }
+    }
+}
+
+/// A sleeping island keeps its contacts' warm starts (they are not listed
+/// while it sleeps), so that a woken one starts from its impulses: with
+/// PGS, the woken step needs few sweeps.
+#[test]
+fn a_sleeping_island_keeps_its_warm_start() {
+    use cosim_server::engine::collision::Counterpart;
+    let mut model = scene(None, SLEEP);
+    model.params.solver = cosim_shared::SolverChoice::Pgs;
+    let floor = model.contact_id(0, Counterpart::Plane(0));
+    let stack = model.contact_id(0, Counterpart::Body(1));
+    let mut e = Engine::new(model);
+    run_until_asleep(&mut e, 3);
+    for _ in 0..100 {
+        assert!(e.step().ok());
+    }
+    // The stack's weight: the floor carries two spheres, the pair one, per
+    // step of 1 ms.
+    let g = 9.81 * 1e-3;
+    let w = e
+        .state()
+        .warm(floor)
+        .expect("the floor contact's warm start");
+    assert!((w.normal - 2.0 * g).abs() < 1e-6, "{w:?}");
+    let w = e
+        .state()
+        .warm(stack)
+        .expect("the stack contact's warm start");
+    assert!((w.normal - g).abs() < 1e-6, "{w:?}");
+    // Woken by a push straight down on the top: from its warm start, PGS
+    // converges in a handful of sweeps.
+    e.add_body_impulse(1, Vector3::new(0.0, 0.0, -1e-4), Vector3::zeros())
+        .unwrap();
+    let r = e.step();
+    assert!(r.ok() && r.sleeping == 1, "{r:?}");
+    assert!(r.pivots < 50, "{} sweeps on waking", r.pivots);
+}
