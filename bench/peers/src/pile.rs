@@ -134,7 +134,7 @@ pub fn table(rows: &[Row], settings: &Settings) -> String {
     );
     for r in rows {
         t += &format!(
-            "| {} | {} | {} | {} | {:.3} | {:.2} | {:.2e} | {} | {:.2e} | {} |\n",
+            "| {} | {} | {} | {} | {:.3} | {:.3e} | {:.2e} | {} | {:.2e} | {} |\n",
             r.engine,
             r.setting,
             r.n,
