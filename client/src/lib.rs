@@ -312,7 +312,6 @@ impl Connection {
                 return Err(ClientError::Interrupted);
             }
         };
-        let mut check = GoneCheck::new();
         loop {
             // NOTE: read whether the server still holds the request before
             // draining: a server that answers and drops the request between

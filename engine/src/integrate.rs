@@ -42,11 +42,7 @@ pub fn positions(
 ) -> Result<(), usize> {
     poses.clear();
     for (i, b) in state.bodies.iter().enumerate() {
-        if state
-            .sleep_tag
-            .get(i)
-            .is_some_and(|&t| t != super::sleep::AWAKE)
-        {
+        if super::sleep::asleep(state, i) {
             // Asleep: the pose stays, to the bit (sleep.rs).
             poses.push((b.x, b.q));
             continue;
@@ -68,14 +64,11 @@ pub fn positions(
         }
         poses.push((x, q));
     }
-    for (i, (b, &(x, q))) in state.bodies.iter_mut().zip(poses.iter()).enumerate() {
-        if state
-            .sleep_tag
-            .get(i)
-            .is_some_and(|&t| t != super::sleep::AWAKE)
-        {
+    for (i, &(x, q)) in poses.iter().enumerate() {
+        if super::sleep::asleep(state, i) {
             continue;
         }
+        let b = &mut state.bodies[i];
         let k = 6 * i;
         b.v = Vector3::new(nu[k], nu[k + 1], nu[k + 2]);
         b.w = Vector3::new(nu[k + 3], nu[k + 4], nu[k + 5]);

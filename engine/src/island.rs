@@ -84,9 +84,7 @@ impl Islands {
         }
         out
     }
-}
 
-impl Islands {
     /// Keeps, for each island of the last partition (a body in none is an
     /// island of its own), the least `count` of its bodies whose `tag` is
     /// `only` (`sleep.rs`: the steps at rest of the awake bodies).

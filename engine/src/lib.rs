@@ -186,14 +186,11 @@ impl Workspace {
         applied::inverse_masses(model, state, &mut self.minv);
         // A sleeping body is static for the step: a late contact with an
         // awake body (`sleep.rs`) cannot move it.
-        for (m, _) in self
-            .minv
-            .iter_mut()
-            .zip(&state.sleep_tag)
-            .filter(|(_, &t)| t != sleep::AWAKE)
-        {
-            m.inv_m = 0.0;
-            m.inv_i = nalgebra::Matrix3::zeros();
+        for (i, m) in self.minv.iter_mut().enumerate() {
+            if sleep::asleep(state, i) {
+                m.inv_m = 0.0;
+                m.inv_i = nalgebra::Matrix3::zeros();
+            }
         }
     }
 
@@ -264,13 +261,10 @@ impl Workspace {
     /// step's own.
     fn select(&mut self, model: &Model, state: &State, inputs: &Inputs) {
         applied::free_velocity(model, state, inputs, &self.minv, &mut self.nu_free);
-        for (i, _) in state
-            .sleep_tag
-            .iter()
-            .enumerate()
-            .filter(|(_, &t)| t != sleep::AWAKE)
-        {
-            self.nu_free[6 * i..6 * i + 6].fill(0.0);
+        for (i, nu) in self.nu_free.chunks_exact_mut(6).enumerate() {
+            if sleep::asleep(state, i) {
+                nu.fill(0.0);
+            }
         }
         if self.widen(model, state, Speeds::Free) {
             // The contact indices changed: a matrix made for the old list
@@ -587,12 +581,7 @@ impl Engine {
                 &mut self.ws.islands,
             );
         }
-        report.sleeping = self
-            .state
-            .sleep_tag
-            .iter()
-            .filter(|&&t| t != sleep::AWAKE)
-            .count();
+        report.sleeping = sleep::count(&self.state);
         report.active_contacts = self
             .ws
             .impulses
@@ -854,11 +843,7 @@ impl Engine {
             ws.sleeping_warm
                 .extend(state.warm_contacts.iter().filter(|w| {
                     let (a, b) = model.contact_bodies(w.id);
-                    sleep::asleep(state, a)
-                        && match b {
-                            Counterpart::Body(j) => sleep::asleep(state, j),
-                            Counterpart::Plane(_) => true,
-                        }
+                    sleep::unlisted(state, a, b)
                 }));
         }
         // Filled below in the LCP's contact order, which is ascending id.

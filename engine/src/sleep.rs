@@ -56,6 +56,21 @@ pub fn any_asleep(state: &State) -> bool {
     state.sleep_tag.iter().any(|&t| t != AWAKE)
 }
 
+/// How many bodies are asleep.
+pub fn count(state: &State) -> usize {
+    state.sleep_tag.iter().filter(|&&t| t != AWAKE).count()
+}
+
+/// Whether the contact of body `a` with `b` has no awake body (between two
+/// sleeping bodies, or a sleeping body and a plane): it is not listed.
+pub fn unlisted(state: &State, a: usize, b: Counterpart) -> bool {
+    asleep(state, a)
+        && match b {
+            Counterpart::Body(j) => asleep(state, j),
+            Counterpart::Plane(_) => true,
+        }
+}
+
 /// Wakes every body with tag `tag`; true when one woke.
 fn wake_tag(state: &mut State, tag: u32) -> bool {
     let mut woke = false;
@@ -96,12 +111,9 @@ pub fn wake_touched(state: &mut State, contacts: &[Contact]) -> bool {
     woke
 }
 
-/// Drops the contacts with no awake body: between two sleeping bodies, or
-/// a sleeping body and a plane.
+/// Drops the contacts with no awake body ([`unlisted`]).
 pub fn drop_sleeping(state: &State, contacts: &mut Vec<Contact>) {
-    contacts.retain(|c| {
-        !asleep(state, c.geom.a) || matches!(c.geom.b, Counterpart::Body(j) if !asleep(state, j))
-    });
+    contacts.retain(|c| !unlisted(state, c.geom.a, c.geom.b));
 }
 
 /// After the step: counts each awake body's steps at rest and puts the

@@ -368,8 +368,8 @@ impl Pgs {
     /// the sweep's change `g_k = lambda_k+1 - lambda_k` is taken as the
     /// (preconditioned) descent direction, and the impulses move on along
     /// `d_k = g_k + beta d_k-1`, `beta = |g_k|^2 / |g_k-1|^2` (Fletcher-
-    /// Reeves), restarted (`d = g`) when `beta > 1`, i.e. when the sweeps
-    /// stop shrinking. The next sweep projects whatever the step left
+    /// Reeves), restarted (`d = g`) when `beta > RESTART_BETA`, i.e. when
+    /// the sweeps grow. The next sweep projects whatever the step left
     /// outside the cones. Measured on the 100-sphere pile at rest: plain
     /// sweeps need 1,500-5,000 iterations to 1e-6 m/s, this a few hundred
     /// (`bench pile`); on small scenes it changes little.
