@@ -7,9 +7,12 @@
 //! and twists too. Timing covers the step calls only.
 
 use crate::rapier;
+use cosim_server::bench::accuracy::bounds;
 use cosim_server::bench::pile::{self, Settings};
 use cosim_server::engine::{measure, BodyState, Model, State};
+use cosim_server::plot::{color, ensure_font, log_log, LogLog, FONT};
 use cosim_shared::Scene;
+use plotters::prelude::*;
 use rapier3d_f64::prelude::*;
 use std::time::Instant;
 
@@ -185,19 +188,6 @@ fn curves(rows: &[Row]) -> Vec<(String, Vec<&Row>)> {
     out
 }
 
-/// Log-axis bounds with a factor 2 of margin.
-fn bounds(v: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (lo, hi) = v
-        .filter(|x| *x > 0.0 && x.is_finite())
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
-            (lo.min(x), hi.max(x))
-        });
-    if !(lo.is_finite() && hi > 0.0) {
-        return (1e-3, 1.0);
-    }
-    (lo / 2.0, hi * 2.0)
-}
-
 /// A log axis' tick label only at 1, 2 and 5 times a power of ten: at
 /// every tick the labels run into each other ("9001000").
 fn sparse(x: f64, label: impl Fn(f64) -> String) -> String {
@@ -207,6 +197,24 @@ fn sparse(x: f64, label: impl Fn(f64) -> String) -> String {
     } else {
         String::new()
     }
+}
+
+/// The figures' size in pixels.
+const SIZE: (u32, u32) = (1100, 720);
+
+/// The legend of `chart`, at `position`.
+fn legend<'a, 'b: 'a>(
+    chart: &mut LogLog<'a, 'b>,
+    position: SeriesLabelPosition,
+) -> Result<(), Box<dyn std::error::Error>> {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK.mix(0.4))
+        .label_font((FONT, 12))
+        .position(position)
+        .draw()?;
+    Ok(())
 }
 
 /// Overlaps below this (mm) sit on the axis floor.
@@ -224,7 +232,6 @@ pub fn figures(
     dir: &std::path::Path,
     machine: &str,
 ) -> Result<Vec<std::path::PathBuf>, String> {
-    use cosim_server::plot::{color, ensure_font, FONT};
     use plotters::prelude::*;
     ensure_font().map_err(|e| e.to_string())?;
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -232,28 +239,18 @@ pub fn figures(
     let time = dir.join("pile-time.png");
     let precision = dir.join("pile-work-precision.png");
     let draw_time = || -> Result<(), Box<dyn std::error::Error>> {
-        let root = BitMapBackend::new(&time, (1100, 720)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let (x0, x1) = bounds(rows.iter().map(|r| r.n as f64));
-        let (y0, y1) = bounds(rows.iter().map(mean_ms));
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                format!("Pile: time per step against N ({machine})"),
-                (FONT, 20),
-            )
-            .margin(15)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc("spheres N")
-            .y_desc("mean wall time per step (ms), one thread")
-            .label_style((FONT, 14))
-            .axis_desc_style((FONT, 15))
-            .x_label_formatter(&|x| sparse(*x, |x| format!("{x:.0}")))
-            .y_label_formatter(&|y| sparse(*y, |y| format!("{y:.0e}")))
-            .draw()?;
+        let root = BitMapBackend::new(&time, SIZE).into_drawing_area();
+        let mut chart = log_log(
+            &root,
+            &format!("Pile: time per step against N ({machine})"),
+            bounds(rows.iter().map(|r| r.n as f64)),
+            bounds(rows.iter().map(mean_ms)),
+            ("spheres N", "mean wall time per step (ms), one thread"),
+            (
+                |x| sparse(x, |x| format!("{x:.0}")),
+                |y| sparse(y, |y| format!("{y:.0e}")),
+            ),
+        )?;
         for (i, (key, pts)) in curves.iter().enumerate() {
             let c = color(i);
             let line: Vec<(f64, f64)> = pts.iter().map(|r| (r.n as f64, mean_ms(r))).collect();
@@ -266,62 +263,40 @@ pub fn figures(
                 });
             chart.draw_series(line.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK.mix(0.4))
-            .label_font((FONT, 12))
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()?;
+        legend(&mut chart, SeriesLabelPosition::LowerRight)?;
         root.present()?;
         Ok(())
     };
     draw_time().map_err(|e| format!("{}: {e}", time.display()))?;
+    let overlap = |r: &Row| (r.worst_overlap * 1e3).max(OVERLAP_FLOOR);
     let draw_precision = || -> Result<(), Box<dyn std::error::Error>> {
-        let root = BitMapBackend::new(&precision, (1100, 720)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let (x0, x1) = bounds(rows.iter().map(mean_ms));
-        let (y0, y1) = bounds(
-            rows.iter()
-                .map(|r| (r.worst_overlap * 1e3).max(OVERLAP_FLOOR)),
-        );
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                format!("Pile: worst overlap against time per step ({machine})"),
-                (FONT, 20),
-            )
-            .margin(15)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc("mean wall time per step (ms), one thread")
-            .y_desc("worst overlap over the run (mm)")
-            .label_style((FONT, 14))
-            .axis_desc_style((FONT, 15))
-            .x_label_formatter(&|x| sparse(*x, |x| format!("{x:.0e}")))
-            .y_label_formatter(&|y| sparse(*y, |y| format!("{y:.0e}")))
-            .draw()?;
+        let root = BitMapBackend::new(&precision, SIZE).into_drawing_area();
+        let mut chart = log_log(
+            &root,
+            &format!("Pile: worst overlap against time per step ({machine})"),
+            bounds(rows.iter().map(mean_ms)),
+            bounds(rows.iter().map(overlap)),
+            (
+                "mean wall time per step (ms), one thread",
+                "worst overlap over the run (mm)",
+            ),
+            (
+                |x| sparse(x, |x| format!("{x:.0e}")),
+                |y| sparse(y, |y| format!("{y:.0e}")),
+            ),
+        )?;
         for (i, (key, pts)) in curves.iter().enumerate() {
             let c = color(i);
             chart
                 .draw_series(pts.iter().map(|r| {
-                    let p = (mean_ms(r), (r.worst_overlap * 1e3).max(OVERLAP_FLOOR));
-                    EmptyElement::at(p)
+                    EmptyElement::at((mean_ms(r), overlap(r)))
                         + Circle::new((0, 0), 5, c.filled())
                         + Text::new(format!("N={}", r.n), (7, -7), (FONT, 11))
                 }))?
                 .label(key.clone())
                 .legend(move |(x, y)| Circle::new((x + 10, y), 5, c.filled()));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK.mix(0.4))
-            .label_font((FONT, 12))
-            .position(SeriesLabelPosition::LowerLeft)
-            .draw()?;
+        legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
         root.present()?;
         Ok(())
     };

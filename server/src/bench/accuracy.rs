@@ -425,24 +425,17 @@ fn draw(
     machine: &str,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let root = BitMapBackend::new(path, (1000, 720)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let (x0, x1) = bounds(pts.iter().map(|p| p.wall_per_sim_s));
-    let (y0, y1) = bounds(pts.iter().map(|p| p.score.error.max(ERROR_FLOOR)));
-    let mut chart = ChartBuilder::on(&root)
-        .caption(format!("{} ({})", case.title(), machine), (FONT, 20))
-        .margin(15)
-        .x_label_area_size(50)
-        .y_label_area_size(80)
-        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
-    chart
-        .configure_mesh()
-        .x_desc("wall time per simulated second (s), one thread")
-        .y_desc(case.error_name())
-        .label_style((FONT, 14))
-        .axis_desc_style((FONT, 15))
-        .x_label_formatter(&|x| format!("{x:.0e}"))
-        .y_label_formatter(&|y| format!("{y:.0e}"))
-        .draw()?;
+    let mut chart = crate::plot::log_log(
+        &root,
+        &format!("{} ({})", case.title(), machine),
+        bounds(pts.iter().map(|p| p.wall_per_sim_s)),
+        bounds(pts.iter().map(|p| p.score.error.max(ERROR_FLOOR))),
+        (
+            "wall time per simulated second (s), one thread",
+            case.error_name(),
+        ),
+        (|x| format!("{x:.0e}"), |y| format!("{y:.0e}")),
+    )?;
     let mut curves: Vec<(String, String)> = Vec::new();
     for p in pts {
         let k = (p.engine.clone(), p.setting.clone());
@@ -485,7 +478,7 @@ fn draw(
 }
 
 /// Log-axis bounds with a margin of a factor 2 either side.
-fn bounds(v: impl Iterator<Item = f64>) -> (f64, f64) {
+pub fn bounds(v: impl Iterator<Item = f64>) -> (f64, f64) {
     let (lo, hi) = v.fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
         (lo.min(x), hi.max(x))
     });

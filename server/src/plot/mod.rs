@@ -30,6 +30,53 @@ pub fn ensure_font() -> Result<(), PlotError> {
     }
 }
 
+/// A log-log chart as the benchmarks draw them.
+pub type LogLog<'a, 'b> = plotters::chart::ChartContext<
+    'a,
+    plotters::prelude::BitMapBackend<'b>,
+    plotters::prelude::Cartesian2d<
+        plotters::prelude::LogCoord<f64>,
+        plotters::prelude::LogCoord<f64>,
+    >,
+>;
+
+/// How an axis writes a tick's value.
+pub type TickLabel = fn(f64) -> String;
+
+/// A log-log chart on `root`, cleared: the caption, the axes over `x` and
+/// `y` described by `desc` (x, y), the mesh, tick labels by `label` (x, y).
+/// `bench accuracy` and the peers' pile figures draw on it.
+pub fn log_log<'a, 'b>(
+    root: &'a plotters::prelude::DrawingArea<
+        plotters::prelude::BitMapBackend<'b>,
+        plotters::coord::Shift,
+    >,
+    caption: &str,
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+    desc: (&str, &str),
+    label: (TickLabel, TickLabel),
+) -> Result<LogLog<'a, 'b>, Box<dyn std::error::Error>> {
+    use plotters::prelude::*;
+    root.fill(&WHITE)?;
+    let mut chart = ChartBuilder::on(root)
+        .caption(caption, (FONT, 20))
+        .margin(15)
+        .x_label_area_size(50)
+        .y_label_area_size(80)
+        .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
+    chart
+        .configure_mesh()
+        .x_desc(desc.0)
+        .y_desc(desc.1)
+        .label_style((FONT, 14))
+        .axis_desc_style((FONT, 15))
+        .x_label_formatter(&|x| label.0(*x))
+        .y_label_formatter(&|y| label.1(*y))
+        .draw()?;
+    Ok(chart)
+}
+
 /// Colour `i` of the palette (Tableau 10): bodies, contacts and joints.
 pub fn color(i: usize) -> RGBColor {
     const PALETTE: [RGBColor; 10] = [
