@@ -355,10 +355,7 @@ impl Recorder {
         if f.step == 0 {
             return Ok(());
         }
-        for (j, p) in f.joint_impulses[..(f.joint_count as usize).min(crate::MAX_JOINTS)]
-            .iter()
-            .enumerate()
-        {
+        for (j, p) in f.joint_impulses.iter().enumerate() {
             let Some(joint) = self.scene.joints.get(j) else {
                 continue;
             };

@@ -73,6 +73,8 @@ pub enum ClientError {
     /// The server went away without a shutdown frame: killed, or its
     /// process ended (told within [`SERVER_CHECK`] of a wait).
     ServerGone { name: String },
+    /// A state frame whose words did not match its header.
+    BadFrame(WireError),
 }
 
 /// How often a wait checks that the server is still there (a read of its
@@ -134,6 +136,7 @@ impl fmt::Display for ClientError {
                 f,
                 "the server '{name}' is gone (killed, or it ended without a shutdown frame)"
             ),
+            ClientError::BadFrame(e) => write!(f, "a malformed state frame: {e}"),
         }
     }
 }
@@ -435,15 +438,18 @@ impl Connection {
     }
 }
 
+/// A state message in shared memory: its header and payload words.
+type StateSample = iceoryx2::sample::Sample<ipc::Service, [u64], StateHeader>;
+
 /// The state subscription with its wake-up event.
 struct StateReader {
     name: String,
     service: iceoryx2::service::port_factory::publish_subscribe::PortFactory<
         ipc::Service,
-        StateFrame,
-        (),
+        [u64],
+        StateHeader,
     >,
-    sub: Subscriber<ipc::Service, StateFrame, ()>,
+    sub: Subscriber<ipc::Service, [u64], StateHeader>,
     /// None for a polling reader: the server's event then has one listener
     /// less to notify every step.
     ready: Option<Listener<ipc::Service>>,
@@ -466,7 +472,9 @@ impl StateReader {
     }
 
     /// Subscribes to the state stream `(service, event)` of server `name`:
-    /// every frame, or the decimated stream.
+    /// every frame, or the decimated stream. The buffer is cut to the
+    /// largest the server allows for its scene's frame size
+    /// (`services::state_buffer`).
     fn open_stream(
         node: &Node<ipc::Service>,
         name: &str,
@@ -476,12 +484,14 @@ impl StateReader {
     ) -> Result<Self, ClientError> {
         let service = node
             .service_builder(&service_name(&state)?)
-            .publish_subscribe::<StateFrame>()
+            .publish_subscribe::<[u64]>()
+            .user_header::<StateHeader>()
             .open()
             .map_err(|e| missing(name, &state, e))?;
+        let most = service.static_config().subscriber_max_buffer_size();
         let sub = service
             .subscriber_builder()
-            .buffer_size(buffer)
+            .buffer_size(buffer.clamp(1, most.max(1)))
             .create()
             .map_err(|e| ipc("cannot subscribe to the state")(&e))?;
         let ready = if wake {
@@ -518,18 +528,19 @@ impl StateReader {
     }
 
     /// The newest frame in the buffer, if any (older ones are dropped
-    /// unread). The entries in use only: the rest of the 8.5 KB stays in
-    /// the server's cache (`UsedEntries::write_used` says why).
+    /// unread).
     fn latest(&self) -> Result<Option<StateFrame>, ClientError> {
-        Ok(self.receive(true)?.map(|s| s.payload().used_copy()))
+        match self.receive(true)? {
+            Some(s) => StateFrame::decode(s.user_header(), s.payload())
+                .map(Some)
+                .map_err(ClientError::BadFrame),
+            None => Ok(None),
+        }
     }
 
     /// The next sample in the buffer, or with `newest` the newest one (the
     /// older ones dropped unread), read in place in shared memory.
-    fn receive(
-        &self,
-        newest: bool,
-    ) -> Result<Option<iceoryx2::sample::Sample<ipc::Service, StateFrame, ()>>, ClientError> {
+    fn receive(&self, newest: bool) -> Result<Option<StateSample>, ClientError> {
         let mut got = None;
         while let Some(s) = self
             .sub
@@ -551,28 +562,23 @@ impl StateReader {
         mode: WaitMode,
         timeout: Duration,
         newest: bool,
-        accept: impl FnMut(&StateFrame) -> bool,
+        accept: impl FnMut(&StateHeader) -> bool,
     ) -> Result<StateFrame, ClientError> {
-        let mut out = None;
-        self.wait_with(node, mode, timeout, newest, accept, |f| {
-            out = Some(f.used_copy())
-        })?;
-        out.ok_or(ClientError::Timeout {
-            what: "state frame",
-            after: timeout,
-        })
+        let mut out = StateFrame::default();
+        self.wait_with(node, mode, timeout, newest, accept, &mut out)?;
+        Ok(out)
     }
 
-    /// Waits for a frame that `accept` takes, in the given mode, and hands
-    /// it to `take` where it lies in shared memory (no copy on the way).
+    /// Waits for a frame whose header `accept` takes, in the given mode,
+    /// and reads it into `into` (whose buffers are reused).
     fn wait_with(
         &self,
         node: &Node<ipc::Service>,
         mode: WaitMode,
         timeout: Duration,
         newest: bool,
-        mut accept: impl FnMut(&StateFrame) -> bool,
-        mut take: impl FnMut(&StateFrame),
+        mut accept: impl FnMut(&StateHeader) -> bool,
+        into: &mut StateFrame,
     ) -> Result<(), ClientError> {
         let start = Instant::now();
         let spin_for = match mode {
@@ -584,9 +590,10 @@ impl StateReader {
         let mut check = GoneCheck::new();
         loop {
             if let Some(sample) = self.receive(newest)? {
-                if accept(sample.payload()) {
-                    take(sample.payload());
-                    return Ok(());
+                if accept(sample.user_header()) {
+                    return into
+                        .read(sample.user_header(), sample.payload())
+                        .map_err(ClientError::BadFrame);
                 }
                 continue;
             }
@@ -646,7 +653,7 @@ pub struct Controller {
     conn: Connection,
     id: u32,
     reader: StateReader,
-    input: Publisher<ipc::Service, InputFrame, ()>,
+    input: Publisher<ipc::Service, [u64], InputHeader>,
     wait: WaitMode,
     /// The step answered last, so that a frame published again for the same
     /// step (after a join or a pause) is not answered twice.
@@ -654,15 +661,12 @@ pub struct Controller {
     /// The sequence of the frame answered last (a failed step's frame asks
     /// again only if it is newer).
     answered_sequence: u64,
-    /// The last frame received (valid once `has_last`), written in place
-    /// entry by entry (`last_written` marks what earlier frames left).
-    last: Box<StateFrame>,
+    /// The last frame received (valid once `has_last`), read into the
+    /// same buffers each step.
+    last: StateFrame,
     has_last: bool,
-    last_written: Written,
     sequence: u64,
     info: ControlResponse,
-    /// What earlier inputs left in the input publisher's samples.
-    written: Written,
     /// `leave` was called (a drop then sends no second one).
     left: bool,
 }
@@ -677,13 +681,20 @@ impl Controller {
         // state event has nobody to wake for it (a system call saved per
         // step when every reader polls).
         let reader = StateReader::open(&conn.node, name, 2, wait != WaitMode::Spin)?;
+        let info = conn.info()?;
+        // Room for a torque on every joint and a few impulses; a larger
+        // input grows the publisher's memory (power-of-two strategy), once.
+        let words = input_words(info.joint_count as usize, 8);
         let input = conn
             .node
             .service_builder(&service_name(&services::input(name))?)
-            .publish_subscribe::<InputFrame>()
+            .publish_subscribe::<[u64]>()
+            .user_header::<InputHeader>()
             .open()
             .map_err(|e| missing(name, &services::input(name), e))?
             .publisher_builder()
+            .initial_max_slice_len(words.max(1))
+            .allocation_strategy(AllocationStrategy::PowerOfTwo)
             .create()
             .map_err(|e| ipc("cannot publish inputs")(&e))?;
         let info = conn.request(
@@ -702,12 +713,10 @@ impl Controller {
             wait,
             answered: None,
             answered_sequence: 0,
-            last: Box::default(),
+            last: StateFrame::default(),
             has_last: false,
-            last_written: Written::default(),
             sequence: 0,
             info,
-            written: Written::default(),
             left: false,
         })
     }
@@ -727,18 +736,18 @@ impl Controller {
 
     /// The last frame received.
     pub fn last_state(&self) -> Option<&StateFrame> {
-        self.has_last.then_some(&*self.last)
+        self.has_last.then_some(&self.last)
     }
 
     /// Waits for the state of a step not yet answered. A frame with
     /// `STATUS_SHUTDOWN` ends the session with [`ClientError::Shutdown`].
     pub fn next_state(&mut self, timeout: Duration) -> Result<StateFrame, ClientError> {
-        self.next_state_ref(timeout).copied()
+        self.next_state_ref(timeout).cloned()
     }
 
     /// [`Controller::next_state`] without the copy: the frame stays in the
-    /// controller (also [`Controller::last_state`]) until the next call.
-    /// Only the entries in use are read from shared memory.
+    /// controller (also [`Controller::last_state`]) until the next call,
+    /// read into the same buffers every step.
     pub fn next_state_ref(&mut self, timeout: Duration) -> Result<&StateFrame, ClientError> {
         let answered = self.answered;
         let answered_sequence = self.answered_sequence;
@@ -748,7 +757,6 @@ impl Controller {
             conn,
             wait,
             last,
-            last_written,
             ..
         } = self;
         reader.wait_with(
@@ -772,7 +780,7 @@ impl Controller {
                 f.status & STATUS_SHUTDOWN != 0
                     || (f.status & STATUS_WAITING == 0 && (Some(f.step) != answered || again))
             },
-            |f| last.write_used(f, last_written),
+            last,
         )?;
         self.has_last = true;
         if self.last.status & STATUS_SHUTDOWN != 0 {
@@ -783,13 +791,18 @@ impl Controller {
 
     /// Sends `input` as the answer to the last state received.
     pub fn send(&mut self, mut input: InputFrame) -> Result<(), ClientError> {
+        self.send_ref(&mut input)
+    }
+
+    /// [`Controller::send`] of a frame the caller keeps (and reuses).
+    pub fn send_ref(&mut self, input: &mut InputFrame) -> Result<(), ClientError> {
         let step = if self.has_last { self.last.step } else { 0 };
         input.version = PROTOCOL_VERSION;
         input.controller_id = self.id;
         input.step = step;
         self.sequence += 1;
         input.sequence = self.sequence;
-        self.send_raw(&input)?;
+        self.send_raw(input)?;
         self.answered = Some(step);
         self.answered_sequence = if self.has_last { self.last.sequence } else { 0 };
         Ok(())
@@ -797,7 +810,18 @@ impl Controller {
 
     /// Sends a frame as it is (tests use it to send bad inputs).
     pub fn send_raw(&mut self, input: &InputFrame) -> Result<(), ClientError> {
-        send_used(&self.input, input, &mut self.written)
+        self.send_words(input.header(), input.words(), |w| input.encode(w))
+    }
+
+    /// Sends a header and `len` words that `encode` writes, as they are:
+    /// tests and the fuzzer use it for headers whose counts do not match.
+    pub fn send_words(
+        &mut self,
+        header: InputHeader,
+        len: usize,
+        encode: impl FnOnce(&mut UninitWords<'_>),
+    ) -> Result<(), ClientError> {
+        send_words(&self.input, header, len, encode)
             .map_err(|e| ipc("cannot send the input")(&e))?;
         // A spinning server needs no wake-up.
         if !self.has_last || self.last.status & STATUS_SERVER_SPINS == 0 {

@@ -20,13 +20,16 @@ import time
 
 import iceoryx2 as iox2
 
-MAX_BODIES, MAX_JOINTS, MAX_CONTACTS, MAX_CONTROLLERS = 32, 32, 64, 8
+MAX_CONTROLLERS = 8
 MESSAGE_LEN = 120
-VERSION = 1
-CMD_JOIN, CMD_LEAVE = 1, 2
+VERSION = 2
+CMD_JOIN, CMD_LEAVE, CMD_INFO = 1, 2, 9
 ROLE_CONTROLLER = 1
 STATUS_SOLVER_FAILED, STATUS_SHUTDOWN, STATUS_WAITING = 2, 16, 32
 SLOT_JOINED, SLOT_ANSWERED = 1, 4
+# Words (8 bytes) of each entry in a payload.
+BODY_WORDS, JOINT_WORDS, CONTACT_WORDS = 13, 3, 8
+TORQUE_WORDS, IMPULSE_WORDS = 4, 7
 
 
 class BodyFrame(ctypes.Structure):
@@ -59,7 +62,7 @@ class ControllerSlot(ctypes.Structure):
     ]
 
 
-class StateFrame(ctypes.Structure):
+class StateHeader(ctypes.Structure):
     _fields_ = [
         ("version", ctypes.c_uint32),
         ("status", ctypes.c_uint32),
@@ -70,20 +73,19 @@ class StateFrame(ctypes.Structure):
         ("body_count", ctypes.c_uint32),
         ("joint_count", ctypes.c_uint32),
         ("contact_count", ctypes.c_uint32),
+        ("contacts_carried", ctypes.c_uint32),
         ("controller_count", ctypes.c_uint32),
         ("solver_status", ctypes.c_uint32),
         ("lcp_size", ctypes.c_uint32),
+        ("_pad", ctypes.c_uint32),
         ("residual", ctypes.c_double),
         ("dt", ctypes.c_double),
-        ("bodies", BodyFrame * MAX_BODIES),
-        ("joint_impulses", (ctypes.c_double * 3) * MAX_JOINTS),
-        ("contacts", ContactFrame * MAX_CONTACTS),
         ("controllers", ControllerSlot * MAX_CONTROLLERS),
     ]
 
     @staticmethod
     def type_name() -> str:
-        return "cosim::StateFrame.v1"
+        return "cosim::StateHeader.v2"
 
 
 class JointTorque(ctypes.Structure):
@@ -103,7 +105,7 @@ class BodyImpulse(ctypes.Structure):
     ]
 
 
-class InputFrame(ctypes.Structure):
+class InputHeader(ctypes.Structure):
     _fields_ = [
         ("version", ctypes.c_uint32),
         ("controller_id", ctypes.c_uint32),
@@ -111,13 +113,11 @@ class InputFrame(ctypes.Structure):
         ("sequence", ctypes.c_uint64),
         ("torque_count", ctypes.c_uint32),
         ("impulse_count", ctypes.c_uint32),
-        ("torques", JointTorque * MAX_JOINTS),
-        ("impulses", BodyImpulse * MAX_BODIES),
     ]
 
     @staticmethod
     def type_name() -> str:
-        return "cosim::InputFrame.v1"
+        return "cosim::InputHeader.v2"
 
 
 class ControlRequest(ctypes.Structure):
@@ -134,7 +134,7 @@ class ControlRequest(ctypes.Structure):
 
     @staticmethod
     def type_name() -> str:
-        return "cosim::ControlRequest.v1"
+        return "cosim::ControlRequest.v2"
 
 
 class ControlResponse(ctypes.Structure):
@@ -158,33 +158,50 @@ class ControlResponse(ctypes.Structure):
 
     @staticmethod
     def type_name() -> str:
-        return "cosim::ControlResponse.v1"
+        return "cosim::ControlResponse.v2"
 
 
 # The sizes docs/protocol.md states.
-assert ctypes.sizeof(StateFrame) == 8464
-assert ctypes.sizeof(InputFrame) == 2848
+assert ctypes.sizeof(StateHeader) == 280
+assert ctypes.sizeof(InputHeader) == 32
+assert ctypes.sizeof(BodyFrame) == 8 * BODY_WORDS
+assert ctypes.sizeof(ContactFrame) == 8 * CONTACT_WORDS
+assert ctypes.sizeof(JointTorque) == 8 * TORQUE_WORDS
+assert ctypes.sizeof(BodyImpulse) == 8 * IMPULSE_WORDS
 assert ctypes.sizeof(ControlRequest) == 48
 assert ctypes.sizeof(ControlResponse) == 200
 
 
-def read_used(view: StateFrame) -> StateFrame:
-    """A copy of the parts of a frame in shared memory that its counts cover
-    (protocol.md: copying all 8.5 KB pulls every cache line to this core,
-    and the server pays for that on its next write)."""
-    out = StateFrame()
-    src, dst = ctypes.addressof(view), ctypes.addressof(out)
+class State:
+    """A state frame copied out of shared memory: the header and the
+    entries its counts say (protocol.md: the payload words are, in order,
+    body_count BodyFrames, joint_count joint impulses, contacts_carried
+    ContactFrames; on a little-endian machine the words are the bytes of
+    these structs)."""
 
-    def copy(field, count, size):
-        offset = getattr(StateFrame, field).offset
-        ctypes.memmove(dst + offset, src + offset, count * size)
+    def __init__(self, sample):
+        self.header = StateHeader.from_buffer_copy(sample.user_header().contents)
+        h = self.header
+        # The words in the payload: iceoryx2's sample header counts them
+        # (the Python binding's Slice.len() of 0.10 counts bytes instead).
+        words = sample.header.number_of_elements
+        need = BODY_WORDS * h.body_count + JOINT_WORDS * h.joint_count \
+            + CONTACT_WORDS * h.contacts_carried
+        if words != need:
+            raise ValueError(f"state frame: the header's counts need {need} words, "
+                             f"the payload has {words}")
+        at = sample.payload_ptr
+        self.bodies = (BodyFrame * h.body_count).from_buffer_copy(
+            (ctypes.c_uint8 * (8 * BODY_WORDS * h.body_count)).from_address(at))
+        at += 8 * BODY_WORDS * h.body_count
+        joints = (ctypes.c_double * (3 * h.joint_count)).from_address(at)
+        self.joint_impulses = [tuple(joints[3 * j:3 * j + 3]) for j in range(h.joint_count)]
+        at += 8 * JOINT_WORDS * h.joint_count
+        self.contacts = (ContactFrame * h.contacts_carried).from_buffer_copy(
+            (ctypes.c_uint8 * (8 * CONTACT_WORDS * h.contacts_carried)).from_address(at))
 
-    ctypes.memmove(dst, src, StateFrame.bodies.offset)
-    copy("bodies", min(out.body_count, MAX_BODIES), ctypes.sizeof(BodyFrame))
-    copy("joint_impulses", min(out.joint_count, MAX_JOINTS), 3 * 8)
-    copy("contacts", min(out.contact_count, MAX_CONTACTS), ctypes.sizeof(ContactFrame))
-    copy("controllers", MAX_CONTROLLERS, ctypes.sizeof(ControllerSlot))
-    return out
+    def __getattr__(self, name):
+        return getattr(self.header, name)
 
 
 class Client:
@@ -204,16 +221,23 @@ class Client:
         # Subscribe before joining (protocol.md, Lockstep 1).
         self.state = (
             self.node.service_builder(svc("state"))
-            .publish_subscribe(StateFrame)
+            .publish_subscribe(iox2.Slice[ctypes.c_uint64])
+            .user_header(StateHeader)
             .open()
             .subscriber_builder()
             .create()
         )
+        # Room for a torque on every joint and a few impulses; a larger
+        # input grows the publisher's memory (power-of-two strategy).
+        joints = self.request(CMD_INFO).joint_count
         self.input = (
             self.node.service_builder(svc("input"))
-            .publish_subscribe(InputFrame)
+            .publish_subscribe(iox2.Slice[ctypes.c_uint64])
+            .user_header(InputHeader)
             .open()
             .publisher_builder()
+            .initial_max_slice_len(max(1, TORQUE_WORDS * joints + IMPULSE_WORDS * 8))
+            .allocation_strategy(iox2.AllocationStrategy.PowerOfTwo)
             .create()
         )
         self.id = 0
@@ -263,7 +287,7 @@ class Client:
             self.node.wait(iox2.Duration.from_micros(100))
         raise TimeoutError("no answer from the server")
 
-    def next_state(self, answered, timeout=10.0) -> StateFrame:
+    def next_state(self, answered, timeout=10.0) -> State:
         """The newest frame to answer (or the last one): of a step not yet
         answered, or of a failed step that asks for a new answer.
         `answered` is (step, sequence) of the frame answered last, or None."""
@@ -275,7 +299,7 @@ class Client:
                 sample = self.state.receive()
                 if sample is None:
                     break
-                newest = read_used(sample.payload().contents)
+                newest = State(sample)
             if newest is not None:
                 if newest.status & STATUS_SHUTDOWN:
                     return newest
@@ -298,10 +322,18 @@ class Client:
             # after the poll above leaves the event pending.
             self.ready.timed_wait(iox2.Duration.from_secs_f64(min(left, 0.1)))
 
-    def send(self, frame: InputFrame):
-        sample = self.input.loan_uninit()
-        sample = sample.write_payload(frame)
-        sample.send()
+    def send(self, header: InputHeader, torques=(), impulses=()):
+        """Sends an input: the header (its counts set here) and the
+        entries, as payload words (protocol.md, Input frames)."""
+        header.torque_count, header.impulse_count = len(torques), len(impulses)
+        words = TORQUE_WORDS * len(torques) + IMPULSE_WORDS * len(impulses)
+        sample = self.input.loan_slice_uninit(words)
+        ctypes.memmove(sample.user_header_ptr, ctypes.byref(header), ctypes.sizeof(header))
+        at = sample.payload_ptr
+        for entry in list(torques) + list(impulses):
+            ctypes.memmove(at, ctypes.byref(entry), ctypes.sizeof(entry))
+            at += ctypes.sizeof(entry)
+        sample.assume_init().send()
         self.wake.notify()
 
 
@@ -309,7 +341,7 @@ def cross(a, b):
     return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 
 
-def pd_torque(frame: StateFrame, elevation_deg: float):
+def pd_torque(frame: State, elevation_deg: float):
     """Shoulder torque: PD on the arm direction, plus the chain's gravity moment."""
     shoulder = (0.0, 0.0, 0.45)
     masses = (1.0, 0.5)
@@ -352,12 +384,9 @@ def main() -> int:
             shutdown = True
             break
         tau, elevation = pd_torque(frame, args.elevation)
-        out = InputFrame(version=VERSION, controller_id=client.id, step=frame.step,
-                         sequence=sent + 1, torque_count=1)
-        out.torques[0].joint = 0
-        for i in range(3):
-            out.torques[0].torque[i] = tau[i]
-        client.send(out)
+        out = InputHeader(version=VERSION, controller_id=client.id, step=frame.step,
+                          sequence=sent + 1)
+        client.send(out, torques=[JointTorque(joint=0, torque=(ctypes.c_double * 3)(*tau))])
         answered = (frame.step, frame.sequence)
         sent += 1
         if sent == args.exit_without_leave:

@@ -212,7 +212,7 @@ fn a_controller_answers_every_step_in_lockstep_and_the_run_replays_bit_for_bit()
             Ok(f) => f,
             Err(ClientError::Shutdown) => {
                 // The final state comes only in the shutdown frame.
-                let last = *c.last_state().unwrap();
+                let last = c.last_state().unwrap().clone();
                 if seen.last() != Some(&last.step) {
                     seen.push(last.step);
                     frames.push(last.bodies[0].position);
@@ -314,7 +314,7 @@ fn bad_inputs_are_rejected_by_reason_and_the_run_goes_on() {
             7 => {
                 // An answer to an old step first (rejected, not an
                 // answer), then the right one.
-                let mut stale = input;
+                let mut stale = input.clone();
                 stale.controller_id = c.id();
                 stale.step = 3;
                 stale.version = cosim_client::PROTOCOL_VERSION;
@@ -1288,10 +1288,12 @@ fn an_input_from_a_process_that_did_not_join_is_rejected() {
         .unwrap();
     let intruder = node
         .service_builder(&service)
-        .publish_subscribe::<InputFrame>()
+        .publish_subscribe::<[u64]>()
+        .user_header::<cosim_shared::wire::InputHeader>()
         .open()
         .unwrap()
         .publisher_builder()
+        .initial_max_slice_len(64)
         .create()
         .unwrap();
     let mut c = Controller::join(&name, WaitMode::Block).expect("join");
@@ -1304,7 +1306,10 @@ fn an_input_from_a_process_that_did_not_join_is_rejected() {
             ..Default::default()
         };
         forged.push_torque(0, [0.0, 5.0, 0.0]);
-        intruder.send_copy(forged).unwrap();
+        cosim_shared::wire::send_words(&intruder, forged.header(), forged.words(), |w| {
+            forged.encode(w)
+        })
+        .unwrap();
         sent += 1;
         let mut own = InputFrame::default();
         own.push_torque(0, [0.0, 0.2, 0.0]);
@@ -1589,8 +1594,13 @@ fn random_requests_and_inputs_leave_the_server_running() {
         }
         // A random input (rejected, or taken: it is the controller's own
         // publisher) and then, unless it was taken, the proper answer.
-        let bad = fuzz::input_frame(&mut rng, c.id(), f.step, 2, 2);
-        c.send_raw(&bad).unwrap();
+        let (header, words) = fuzz::input_frame(&mut rng, c.id(), f.step, 2, 2);
+        c.send_words(header, words.len(), |w| {
+            for &x in &words {
+                cosim_client::WordSink::put(w, x)
+            }
+        })
+        .unwrap();
         bad_inputs += 1;
         let mut input = InputFrame::default();
         input.push_torque(0, [0.0, -0.1, 0.0]);
@@ -1649,7 +1659,7 @@ fn a_failed_step_asks_the_controllers_for_a_new_answer() {
     let conn = Connection::connect(&name).unwrap();
     let mut failed_frames = 0;
     answer_until_shutdown(&mut c, |c| {
-        let f = *c.last_state().unwrap();
+        let f = c.last_state().unwrap().clone();
         let slot = f.controller(c.id()).unwrap();
         let mut input = InputFrame::default();
         if f.status & STATUS_SOLVER_FAILED != 0 {
@@ -1720,4 +1730,98 @@ fn a_decimated_stream_carries_every_nth_step_and_the_last() {
     let mut want: Vec<(u64, bool)> = (0..=90).step_by(10).map(|k| (k, false)).collect();
     want.push((95, true));
     assert_eq!(seen, want);
+}
+
+/// Issue 14, point 6: frames sized to the scene. A 4,000-sphere pile is
+/// served in lockstep; a controller pushes the highest sphere up every
+/// step while a monitor of the decimated stream reads along. Every frame
+/// carries all 4,000 bodies; the pushed sphere, in free flight above the
+/// pile, gains exactly `J / m` per step over gravity's `-g h`
+/// (semi-implicit Euler, no contact); and the run replays to the bit.
+#[test]
+fn a_four_thousand_sphere_pile_is_served_in_lockstep() {
+    const N: usize = 4000;
+    const STEPS: u64 = 12;
+    let dir = TempDir::new("pile4000");
+    let scene = dir.path().join("pile.toml");
+    let text = cosim_server::bench::pile::text(N, 0.01, 4, "pgs", STEPS, 1);
+    std::fs::write(&scene, &text).unwrap();
+    let name = unique("pile4000");
+    let out = dir.path().join("run");
+    let scene_arg = scene.to_str().unwrap();
+    let server = ServerProc::start(
+        &name,
+        &out,
+        &[
+            scene_arg,
+            "--controllers",
+            "1",
+            "--steps",
+            &STEPS.to_string(),
+            "--deadline-ms",
+            "20000",
+            "--publish-every",
+            "4",
+        ],
+    );
+    let monitor = Monitor::open_every(&name, 64).expect("monitor");
+    let mut c = Controller::join(&name, WaitMode::Block).expect("join");
+    assert_eq!(c.info().body_count as usize, N);
+    let f0 = c.next_state(Duration::from_secs(30)).expect("first state");
+    assert_eq!(f0.bodies.len(), N);
+    let (top, _) = f0
+        .bodies
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.position[2].total_cmp(&b.1.position[2]))
+        .unwrap();
+    let v0 = f0.bodies[top].linear_velocity[2];
+    let (m, g, h, j) = (1.0, 9.81, 0.01, 0.05);
+    let mut pushes = 0u32;
+    let mut last = f0;
+    loop {
+        assert_eq!(last.bodies.len(), N, "step {}", last.step);
+        assert!(last.contacts.len() <= last.contact_count as usize);
+        let expected = v0 + f64::from(pushes) * (j / m - g * h);
+        let vz = last.bodies[top].linear_velocity[2];
+        assert!(
+            (vz - expected).abs() <= 1e-12 * (1.0 + expected.abs()),
+            "step {}: vz {vz} against {expected}",
+            last.step
+        );
+        let mut input = InputFrame::default();
+        input.push_impulse(top as u32, [0.0, 0.0, j], [0.0; 3]);
+        c.send(input).expect("send");
+        pushes += 1;
+        last = match c.next_state(Duration::from_secs(30)) {
+            Ok(f) => f,
+            Err(ClientError::Shutdown) => break,
+            Err(e) => panic!("{e}"),
+        };
+    }
+    assert_eq!(pushes as u64, STEPS);
+    // The shutdown frame holds the final state.
+    let end = c.last_state().unwrap().clone();
+    assert_eq!(end.step, STEPS);
+    let expected = v0 + f64::from(pushes) * (j / m - g * h);
+    assert!((end.bodies[top].linear_velocity[2] - expected).abs() <= 1e-12 * (1.0 + expected));
+    // The decimated stream's frames, in order, to its last.
+    let mut seen = Vec::new();
+    loop {
+        let f = monitor
+            .next(Duration::from_secs(10))
+            .expect("decimated frame");
+        assert_eq!(f.bodies.len(), N);
+        seen.push(f.step);
+        if f.status & STATUS_SHUTDOWN != 0 {
+            break;
+        }
+    }
+    assert!(seen.iter().all(|s| s % 4 == 0), "{seen:?}");
+    assert_eq!(seen.last(), Some(&STEPS), "{seen:?}");
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    assert_eq!(summary(&out)["steps"], STEPS);
+    let (ok, text) = replay(&out);
+    assert!(ok, "{text}");
 }

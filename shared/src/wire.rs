@@ -2,27 +2,64 @@
 //! codes. `docs/protocol.md` describes the same bytes for other languages;
 //! change both together and bump the version in the type names.
 //!
-//! Every type is `#[repr(C)]` with fixed-width fields, 8-byte aligned and
-//! without implicit padding (explicit `_pad` fields fill the gaps), so that a
-//! `ctypes.Structure` written from the protocol document has the same
-//! layout. The `type_name` carries the version: a client built against
-//! another version fails when it opens the service, with iceoryx2's
-//! "incompatible types" error, instead of misreading bytes.
+//! Protocol 2 sizes the frames to the scene (issue 14): a state or input
+//! message is a fixed `#[repr(C)]` user header (the counts, the step, the
+//! controller slots) and an iceoryx2 slice of 8-byte words holding the
+//! entries the counts say, in a fixed order. Words, not typed slices,
+//! because one message holds entries of several kinds; 8-byte words keep
+//! every `f64` aligned, and on a little-endian machine the words of an
+//! entry are the bytes of its `#[repr(C)]` struct below, so a reader in C
+//! or Python may view them as an array of those structs. The header types
+//! are 8-byte aligned without implicit padding (explicit `_pad` fields
+//! fill the gaps). The `type_name` carries the version: a client built
+//! against another version fails when it opens the service, with
+//! iceoryx2's "incompatible types" error, instead of misreading bytes.
 
-use iceoryx2::prelude::{ipc, IceoryxSend, ZeroCopySend};
+use core::mem::MaybeUninit;
+use iceoryx2::prelude::ZeroCopySend;
 
 /// Version of the wire types (also in every `type_name`).
-pub const PROTOCOL_VERSION: u32 = 1;
+pub const PROTOCOL_VERSION: u32 = 2;
 
-/// Bodies a state frame can carry; larger scenes are refused by `serve`.
-pub const MAX_BODIES: usize = 32;
-/// Joints a state frame (and an input) can carry.
-pub const MAX_JOINTS: usize = 32;
-/// Contacts with a non-zero impulse a state frame can carry; the rest are
-/// counted in `contact_count` but left out (`STATUS_CONTACTS_TRUNCATED`).
-pub const MAX_CONTACTS: usize = 64;
 /// Controllers that can be joined at once.
 pub const MAX_CONTROLLERS: usize = 8;
+
+/// Words of one [`BodyFrame`] in a state payload.
+pub const BODY_WORDS: usize = 13;
+/// Words of one joint impulse (`[f64; 3]`) in a state payload.
+pub const JOINT_WORDS: usize = 3;
+/// Words of one [`ContactFrame`] in a state payload.
+pub const CONTACT_WORDS: usize = 8;
+/// Words of one [`JointTorque`] in an input payload.
+pub const TORQUE_WORDS: usize = 4;
+/// Words of one [`BodyImpulse`] in an input payload.
+pub const IMPULSE_WORDS: usize = 7;
+
+/// Contacts a state frame carries at most, for a scene of `bodies` bodies
+/// with `potential` potential contacts: four per body (a sphere in a
+/// settled pile touches about six others, each contact shared by two,
+/// plus the floor for the lowest layer) and 64 more for small scenes,
+/// never more than can exist. The rest are counted in `contact_count` but
+/// left out (`STATUS_CONTACTS_TRUNCATED`). Fixed per scene, so that the
+/// state publisher's memory is allocated once.
+pub fn contact_capacity(bodies: usize, potential: usize) -> usize {
+    potential.min(4 * bodies + 64)
+}
+
+/// Words of a state payload with these counts.
+pub fn state_words(bodies: usize, joints: usize, contacts: usize) -> usize {
+    BODY_WORDS * bodies + JOINT_WORDS * joints + CONTACT_WORDS * contacts
+}
+
+/// Bytes a served scene's state frame (header and words) may take: a
+/// scene of about 40,000 spheres. The state stream's memory holds at
+/// least two frames per subscriber ([`services::state_buffer`]).
+pub const MAX_FRAME_BYTES: usize = 16 << 20;
+
+/// Words of an input payload with these counts.
+pub fn input_words(torques: usize, impulses: usize) -> usize {
+    TORQUE_WORDS * torques + IMPULSE_WORDS * impulses
+}
 
 /// Service names: one function per service, no string literals elsewhere.
 /// Everything of server `NAME` lives under `cosim/NAME/`.
@@ -30,11 +67,13 @@ pub mod services {
     /// Prefix of every service of every server.
     pub const ROOT: &str = "cosim/";
 
-    /// Publish-subscribe, server to all: one [`super::StateFrame`] per step.
+    /// Publish-subscribe, server to all: one state frame per step
+    /// ([`super::StateHeader`] and its words).
     pub fn state(name: &str) -> String {
         format!("{ROOT}{name}/state")
     }
-    /// Publish-subscribe, controllers to server: [`super::InputFrame`].
+    /// Publish-subscribe, controllers to server: input frames
+    /// ([`super::InputHeader`] and its words).
     pub fn input(name: &str) -> String {
         format!("{ROOT}{name}/input")
     }
@@ -68,8 +107,12 @@ pub mod services {
 
     /// Subscribers of the state service (controllers, monitors, recorders).
     pub const MAX_STATE_SUBSCRIBERS: usize = 32;
-    /// Buffer a state subscriber may ask for (a recorder wants every frame).
+    /// Buffer a state subscriber may ask for (a recorder wants every
+    /// frame), in a scene whose frames are small; see [`state_buffer`].
     pub const MAX_STATE_BUFFER: usize = 1024;
+    /// Shared memory the samples of one state stream may take: the
+    /// publisher holds room for every subscriber's whole buffer.
+    pub const STATE_STREAM_BYTES: usize = 256 << 20;
     /// Publishers of the input service.
     pub const MAX_INPUT_PUBLISHERS: usize = 2 * super::MAX_CONTROLLERS;
     /// The server's input buffer: several inputs per controller and step.
@@ -78,12 +121,22 @@ pub mod services {
     pub const MAX_CONTROL_CLIENTS: usize = 32;
     /// Listeners and notifiers of each event service.
     pub const MAX_EVENT_PORTS: usize = 48;
+
+    /// The largest buffer a state subscriber may ask for when a frame has
+    /// `words` payload words: [`MAX_STATE_BUFFER`] for small scenes, fewer
+    /// where that many frames for every subscriber would pass
+    /// [`STATE_STREAM_BYTES`] (a 4,000-body frame is 1.5 MB), never fewer
+    /// than 2.
+    pub fn state_buffer(words: usize) -> usize {
+        let frame = core::mem::size_of::<super::StateHeader>() + 8 * words.max(1);
+        (STATE_STREAM_BYTES / (frame * MAX_STATE_SUBSCRIBERS)).clamp(2, MAX_STATE_BUFFER)
+    }
 }
 
-/// Pose and twist of one body, world frame.
+/// Pose and twist of one body, world frame: [`BODY_WORDS`] words, all
+/// `f64`, in this order.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::BodyFrame.v1")]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct BodyFrame {
     /// Position of the centre of mass (m).
     pub position: [f64; 3],
@@ -100,10 +153,10 @@ pub const CONTACT_PLANE: u32 = 0;
 pub const CONTACT_BODY: u32 = 1;
 
 /// The impulses of one contact over the step, world frame, on `body_a`
-/// (the other side receives the opposite).
+/// (the other side receives the opposite): [`CONTACT_WORDS`] words, the
+/// first two holding `body_a | kind_b << 32` and `index_b | id << 32`.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::ContactFrame.v1")]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ContactFrame {
     pub body_a: u32,
     /// [`CONTACT_PLANE`] or [`CONTACT_BODY`].
@@ -131,7 +184,7 @@ pub const SLOT_ANSWERED: u32 = 4;
 /// A joined controller as the state frame reports it.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::ControllerSlot.v1")]
+#[type_name("cosim::ControllerSlot.v2")]
 pub struct ControllerSlot {
     /// Controller id given at join (0: slot unused).
     pub id: u32,
@@ -157,7 +210,8 @@ pub const STATUS_DEADLINE_MISSED: u32 = 8;
 pub const STATUS_SHUTDOWN: u32 = 16;
 /// The server waits for controllers to join before the first step.
 pub const STATUS_WAITING: u32 = 32;
-/// More contacts than [`MAX_CONTACTS`] had impulses.
+/// More contacts had impulses than the frame has room for
+/// ([`contact_capacity`]).
 pub const STATUS_CONTACTS_TRUNCATED: u32 = 64;
 /// The server busy-polls for inputs (`--wait spin`): a controller need not
 /// notify the wake event after its input (a system call saved per step).
@@ -167,12 +221,39 @@ pub const STATUS_SERVER_SPINS: u32 = 128;
 /// formulation (the server's `--on-failure continue`).
 pub const STATUS_FELL_BACK: u32 = 256;
 
-/// The state after step `step`, published once per step (and again after
-/// reset, restore and join, with the same step).
+/// Why a message's words do not match its header.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WireError {
+    /// The header's counts need `expected` words; the payload has `got`.
+    Length {
+        what: &'static str,
+        expected: usize,
+        got: usize,
+    },
+}
+
+impl core::fmt::Display for WireError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            WireError::Length {
+                what,
+                expected,
+                got,
+            } => write!(
+                f,
+                "{what}: the header's counts need {expected} payload words, the payload has {got}"
+            ),
+        }
+    }
+}
+
+/// The user header of a state message: everything but the entries, which
+/// follow in the payload words: `body_count` bodies, `joint_count` joint
+/// impulses, `contacts_carried` contacts.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("cosim::StateFrame.v1")]
-pub struct StateFrame {
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("cosim::StateHeader.v2")]
+pub struct StateHeader {
     /// [`PROTOCOL_VERSION`].
     pub version: u32,
     /// `STATUS_*` bits.
@@ -187,8 +268,54 @@ pub struct StateFrame {
     pub model_hash: u64,
     pub body_count: u32,
     pub joint_count: u32,
-    /// Contacts with a non-zero impulse in the last step (may exceed the
-    /// array).
+    /// Contacts with a non-zero impulse in the last step (may exceed
+    /// `contacts_carried`).
+    pub contact_count: u32,
+    /// Contacts in the payload.
+    pub contacts_carried: u32,
+    /// Controllers joined.
+    pub controller_count: u32,
+    /// `SOLVER_*` code of the last step.
+    pub solver_status: u32,
+    /// Unknowns of the last step's LCP.
+    pub lcp_size: u32,
+    pub _pad: u32,
+    /// Residual of the last step's LCP (natural map, see README).
+    pub residual: f64,
+    /// Step size (s).
+    pub dt: f64,
+    pub controllers: [ControllerSlot; MAX_CONTROLLERS],
+}
+
+impl StateHeader {
+    /// The slot of controller `id`, if joined.
+    pub fn controller(&self, id: u32) -> Option<&ControllerSlot> {
+        self.controllers
+            .iter()
+            .find(|s| s.id == id && s.flags & SLOT_JOINED != 0)
+    }
+}
+
+/// The state after step `step`, published once per step (and again after
+/// reset, restore and join, with the same step): a [`StateHeader`]'s
+/// fields with its entries read out of the payload. Readers reuse one
+/// (`read`) so that a frame costs no allocation after the first.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StateFrame {
+    /// [`PROTOCOL_VERSION`].
+    pub version: u32,
+    /// `STATUS_*` bits.
+    pub status: u32,
+    /// Steps taken; controllers answer with this number.
+    pub step: u64,
+    /// Simulated time (s).
+    pub sim_time: f64,
+    /// Frames published by this server, counting from 1.
+    pub sequence: u64,
+    /// Hash of the scene as run (FNV-1a of its TOML); equal hashes, same model.
+    pub model_hash: u64,
+    /// Contacts with a non-zero impulse in the last step (may exceed
+    /// `contacts.len()`: see [`STATUS_CONTACTS_TRUNCATED`]).
     pub contact_count: u32,
     /// Controllers joined.
     pub controller_count: u32,
@@ -200,11 +327,13 @@ pub struct StateFrame {
     pub residual: f64,
     /// Step size (s).
     pub dt: f64,
-    pub bodies: [BodyFrame; MAX_BODIES],
+    /// Every body, in the scene's order.
+    pub bodies: Vec<BodyFrame>,
     /// Joint impulses over the step (N s), world frame, on body a of each
     /// joint (body b receives the opposite), as in impulses.csv.
-    pub joint_impulses: [[f64; 3]; MAX_JOINTS],
-    pub contacts: [ContactFrame; MAX_CONTACTS],
+    pub joint_impulses: Vec<[f64; 3]>,
+    /// The contacts with a non-zero impulse, as many as the frame carries.
+    pub contacts: Vec<ContactFrame>,
     pub controllers: [ControllerSlot; MAX_CONTROLLERS],
 }
 
@@ -217,30 +346,140 @@ impl Default for StateFrame {
             sim_time: 0.0,
             sequence: 0,
             model_hash: 0,
-            body_count: 0,
-            joint_count: 0,
             contact_count: 0,
             controller_count: 0,
             solver_status: 0,
             lcp_size: 0,
             residual: 0.0,
             dt: 0.0,
-            bodies: [BodyFrame::default(); MAX_BODIES],
-            joint_impulses: [[0.0; 3]; MAX_JOINTS],
-            contacts: [ContactFrame::default(); MAX_CONTACTS],
+            bodies: Vec::new(),
+            joint_impulses: Vec::new(),
+            contacts: Vec::new(),
             controllers: [ControllerSlot::default(); MAX_CONTROLLERS],
         }
     }
 }
 
+/// Where encoded words go: a `Vec`, or a loaned sample's memory.
+pub trait WordSink {
+    fn put(&mut self, word: u64);
+}
+
+impl WordSink for Vec<u64> {
+    fn put(&mut self, word: u64) {
+        self.push(word);
+    }
+}
+
+/// Writes words into uninitialised memory, counting them: `filled` tells
+/// whether every word was written (and no more were offered).
+pub struct UninitWords<'a> {
+    out: &'a mut [MaybeUninit<u64>],
+    at: usize,
+    overrun: bool,
+}
+
+impl<'a> UninitWords<'a> {
+    pub fn new(out: &'a mut [MaybeUninit<u64>]) -> Self {
+        UninitWords {
+            out,
+            at: 0,
+            overrun: false,
+        }
+    }
+    /// Every word of the memory written, and none offered past it.
+    pub fn filled(&self) -> bool {
+        self.at == self.out.len() && !self.overrun
+    }
+}
+
+impl WordSink for UninitWords<'_> {
+    fn put(&mut self, word: u64) {
+        match self.out.get_mut(self.at) {
+            Some(w) => {
+                w.write(word);
+                self.at += 1;
+            }
+            None => self.overrun = true,
+        }
+    }
+}
+
+fn put_f64s(sink: &mut impl WordSink, xs: &[f64]) {
+    for x in xs {
+        sink.put(x.to_bits());
+    }
+}
+
+fn pair(lo: u32, hi: u32) -> u64 {
+    u64::from(lo) | (u64::from(hi) << 32)
+}
+
+fn split(w: u64) -> (u32, u32) {
+    (w as u32, (w >> 32) as u32)
+}
+
+fn f3(w: &[u64]) -> [f64; 3] {
+    [
+        f64::from_bits(w[0]),
+        f64::from_bits(w[1]),
+        f64::from_bits(w[2]),
+    ]
+}
+
+impl BodyFrame {
+    fn encode(&self, sink: &mut impl WordSink) {
+        put_f64s(sink, &self.position);
+        put_f64s(sink, &self.orientation);
+        put_f64s(sink, &self.linear_velocity);
+        put_f64s(sink, &self.angular_velocity);
+    }
+    /// From exactly [`BODY_WORDS`] words.
+    fn decode(w: &[u64]) -> BodyFrame {
+        BodyFrame {
+            position: f3(&w[0..3]),
+            orientation: [
+                f64::from_bits(w[3]),
+                f64::from_bits(w[4]),
+                f64::from_bits(w[5]),
+                f64::from_bits(w[6]),
+            ],
+            linear_velocity: f3(&w[7..10]),
+            angular_velocity: f3(&w[10..13]),
+        }
+    }
+}
+
+impl ContactFrame {
+    fn encode(&self, sink: &mut impl WordSink) {
+        sink.put(pair(self.body_a, self.kind_b));
+        sink.put(pair(self.index_b, self.id));
+        put_f64s(sink, &self.normal);
+        put_f64s(sink, &self.friction);
+    }
+    /// From exactly [`CONTACT_WORDS`] words.
+    fn decode(w: &[u64]) -> ContactFrame {
+        let (body_a, kind_b) = split(w[0]);
+        let (index_b, id) = split(w[1]);
+        ContactFrame {
+            body_a,
+            kind_b,
+            index_b,
+            id,
+            normal: f3(&w[2..5]),
+            friction: f3(&w[5..8]),
+        }
+    }
+}
+
 impl StateFrame {
-    /// The bodies in use.
+    /// The bodies.
     pub fn bodies(&self) -> &[BodyFrame] {
-        &self.bodies[..(self.body_count as usize).min(MAX_BODIES)]
+        &self.bodies
     }
     /// The contacts carried.
     pub fn contacts(&self) -> &[ContactFrame] {
-        &self.contacts[..(self.contact_count as usize).min(MAX_CONTACTS)]
+        &self.contacts
     }
     /// The slot of controller `id`, if joined.
     pub fn controller(&self, id: u32) -> Option<&ControllerSlot> {
@@ -248,83 +487,76 @@ impl StateFrame {
             .iter()
             .find(|s| s.id == id && s.flags & SLOT_JOINED != 0)
     }
-}
 
-/// High-water marks of the entries written into the frames of one pool of
-/// samples (one publisher's, or one local frame): see
-/// [`UsedEntries::write_used`].
-#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
-pub struct Written {
-    pub bodies: usize,
-    pub joints: usize,
-    pub contacts: usize,
-}
-
-/// `dst[..n] = src[..n]`, and `dst[n..mark]` back to the default; then
-/// raises `mark` to `n`.
-fn write_prefix<T: Copy + Default>(dst: &mut [T], src: &[T], n: usize, mark: &mut usize) {
-    let len = dst.len();
-    let n = n.min(len);
-    dst[..n].copy_from_slice(&src[..n]);
-    if *mark > n {
-        dst[n..(*mark).min(len)].fill(T::default());
-    }
-    *mark = (*mark).max(n);
-}
-
-/// A frame whose arrays are used up to its counts (the state and input
-/// frames), copied by the entries in use.
-pub trait UsedEntries: Default + Sized {
-    /// Makes `self` equal to `src` where `src`'s entries past its counts
-    /// are zero (every frame this crate builds), writing only the header,
-    /// the entries in use and the stale entries `written` says earlier
-    /// frames left (its marks cover every frame ever written into this
-    /// memory, which started zeroed). Why: a full state frame is 8.5 KB,
-    /// 133 cache lines; a reader on another core that copied the last frame
-    /// holds them all, and writing them back costs a cross-core transfer
-    /// each (measured: 5.3 us of a 7 us publish on this machine).
-    fn write_used(&mut self, src: &Self, written: &mut Written);
-
-    /// A local copy of the entries in use (the rest default): what a
-    /// reader needs, without pulling the whole frame across cores.
-    fn used_copy(&self) -> Self {
-        let mut f = Self::default();
-        f.write_used(self, &mut Written::default());
-        f
-    }
-}
-
-/// Sends `frame` on `publisher`, writing only its entries in use into the
-/// loaned sample ([`UsedEntries::write_used`]); `written` holds the marks
-/// of that publisher's samples.
-pub fn send_used<T: UsedEntries + IceoryxSend + ZeroCopySend + core::fmt::Debug>(
-    publisher: &iceoryx2::port::publisher::Publisher<ipc::Service, T, ()>,
-    frame: &T,
-    written: &mut Written,
-) -> Result<usize, iceoryx2::port::SendError> {
-    let mut sample = publisher.loan_uninit()?;
-    // SAFETY: the sample's bytes are initialised: the publisher's data
-    // segment is shared memory the OS hands out zero-filled (POSIX
-    // ftruncate), and since then only frames of this publisher were written
-    // into it. The frames are #[repr(C)] plain numbers (u32, u64, f64,
-    // explicit padding: the layout test below), valid for every bit
-    // pattern. `write_used` then writes every entry that differs from
-    // `frame` (the marks in `written` cover what earlier frames left), so
-    // the sample holds exactly `frame`.
-    let sample = unsafe {
-        sample
-            .payload_mut()
-            .assume_init_mut()
-            .write_used(frame, written);
-        sample.assume_init()
-    };
-    sample.send()
-}
-
-impl UsedEntries for StateFrame {
-    fn write_used(&mut self, src: &StateFrame, written: &mut Written) {
+    /// The header of this frame (counts from the entries).
+    pub fn header(&self) -> StateHeader {
         // Exhaustive: a field added to the frame must be added here.
         let &StateFrame {
+            version,
+            status,
+            step,
+            sim_time,
+            sequence,
+            model_hash,
+            contact_count,
+            controller_count,
+            solver_status,
+            lcp_size,
+            residual,
+            dt,
+            ref bodies,
+            ref joint_impulses,
+            ref contacts,
+            controllers,
+        } = self;
+        StateHeader {
+            version,
+            status,
+            step,
+            sim_time,
+            sequence,
+            model_hash,
+            body_count: bodies.len() as u32,
+            joint_count: joint_impulses.len() as u32,
+            contact_count,
+            contacts_carried: contacts.len() as u32,
+            controller_count,
+            solver_status,
+            lcp_size,
+            _pad: 0,
+            residual,
+            dt,
+            controllers,
+        }
+    }
+
+    /// Payload words of this frame.
+    pub fn words(&self) -> usize {
+        state_words(
+            self.bodies.len(),
+            self.joint_impulses.len(),
+            self.contacts.len(),
+        )
+    }
+
+    /// Writes the payload: bodies, joint impulses, contacts.
+    pub fn encode(&self, sink: &mut impl WordSink) {
+        for b in &self.bodies {
+            b.encode(sink);
+        }
+        for j in &self.joint_impulses {
+            put_f64s(sink, j);
+        }
+        for c in &self.contacts {
+            c.encode(sink);
+        }
+    }
+
+    /// Makes `self` the frame of `header` and `words`, reusing its
+    /// buffers. On a length mismatch the header's fields are taken, the
+    /// entries left empty, and the error says what was missing.
+    pub fn read(&mut self, header: &StateHeader, words: &[u64]) -> Result<(), WireError> {
+        let &StateHeader {
             version,
             status,
             step,
@@ -334,24 +566,21 @@ impl UsedEntries for StateFrame {
             body_count,
             joint_count,
             contact_count,
+            contacts_carried,
             controller_count,
             solver_status,
             lcp_size,
+            _pad: _,
             residual,
             dt,
-            bodies: _,
-            joint_impulses: _,
-            contacts: _,
             controllers,
-        } = src;
+        } = header;
         self.version = version;
         self.status = status;
         self.step = step;
         self.sim_time = sim_time;
         self.sequence = sequence;
         self.model_hash = model_hash;
-        self.body_count = body_count;
-        self.joint_count = joint_count;
         self.contact_count = contact_count;
         self.controller_count = controller_count;
         self.solver_status = solver_status;
@@ -359,24 +588,41 @@ impl UsedEntries for StateFrame {
         self.residual = residual;
         self.dt = dt;
         self.controllers = controllers;
-        write_prefix(
-            &mut self.bodies,
-            &src.bodies,
+        self.bodies.clear();
+        self.joint_impulses.clear();
+        self.contacts.clear();
+        let (nb, nj, nc) = (
             body_count as usize,
-            &mut written.bodies,
-        );
-        write_prefix(
-            &mut self.joint_impulses,
-            &src.joint_impulses,
             joint_count as usize,
-            &mut written.joints,
+            contacts_carried as usize,
         );
-        write_prefix(
-            &mut self.contacts,
-            &src.contacts,
-            contact_count as usize,
-            &mut written.contacts,
-        );
+        // In u128: counts from outside must not overflow the sum.
+        let expected = BODY_WORDS as u128 * nb as u128
+            + JOINT_WORDS as u128 * nj as u128
+            + CONTACT_WORDS as u128 * nc as u128;
+        if expected != words.len() as u128 {
+            return Err(WireError::Length {
+                what: "state frame",
+                expected: usize::try_from(expected).unwrap_or(usize::MAX),
+                got: words.len(),
+            });
+        }
+        let (b, rest) = words.split_at(BODY_WORDS * nb);
+        let (j, c) = rest.split_at(JOINT_WORDS * nj);
+        self.bodies
+            .extend(b.chunks_exact(BODY_WORDS).map(BodyFrame::decode));
+        self.joint_impulses
+            .extend(j.chunks_exact(JOINT_WORDS).map(f3));
+        self.contacts
+            .extend(c.chunks_exact(CONTACT_WORDS).map(ContactFrame::decode));
+        Ok(())
+    }
+
+    /// The frame of `header` and `words`.
+    pub fn decode(header: &StateHeader, words: &[u64]) -> Result<StateFrame, WireError> {
+        let mut f = StateFrame::default();
+        f.read(header, words)?;
+        Ok(f)
     }
 }
 
@@ -389,10 +635,10 @@ pub const SOLVER_NOT_CONVERGED: u32 = 4;
 pub const SOLVER_OTHER: u32 = 5;
 
 /// A held joint torque (N m, world frame): `+torque` on body b, `-torque`
-/// on body a.
+/// on body a. [`TORQUE_WORDS`] words: `joint` (the low half of the first
+/// word), then the torque.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::JointTorque.v1")]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct JointTorque {
     pub joint: u32,
     pub _pad: u32,
@@ -400,10 +646,10 @@ pub struct JointTorque {
 }
 
 /// A one-step impulse on a body (N s and N m s, world frame, through the
-/// centre of mass).
+/// centre of mass). [`IMPULSE_WORDS`] words: `body` (the low half of the
+/// first word), then linear and angular.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::BodyImpulse.v1")]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct BodyImpulse {
     pub body: u32,
     pub _pad: u32,
@@ -411,15 +657,12 @@ pub struct BodyImpulse {
     pub angular: [f64; 3],
 }
 
-/// A controller's answer to state frame `step`.
-///
-/// Torques listed are held by this controller until it sends another
-/// value for the joint; the server applies the sum over controllers.
-/// Impulses act on the next step only.
+/// The user header of an input message; `torque_count` torques and then
+/// `impulse_count` impulses follow in the payload words.
 #[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("cosim::InputFrame.v1")]
-pub struct InputFrame {
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("cosim::InputHeader.v2")]
+pub struct InputHeader {
     /// [`PROTOCOL_VERSION`].
     pub version: u32,
     /// Id given by the join response.
@@ -430,8 +673,25 @@ pub struct InputFrame {
     pub sequence: u64,
     pub torque_count: u32,
     pub impulse_count: u32,
-    pub torques: [JointTorque; MAX_JOINTS],
-    pub impulses: [BodyImpulse; MAX_BODIES],
+}
+
+/// A controller's answer to state frame `step`.
+///
+/// Torques listed are held by this controller until it sends another
+/// value for the joint; the server applies the sum over controllers.
+/// Impulses act on the next step only.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputFrame {
+    /// [`PROTOCOL_VERSION`].
+    pub version: u32,
+    /// Id given by the join response.
+    pub controller_id: u32,
+    /// The `step` of the state frame this input answers.
+    pub step: u64,
+    /// The controller's own counter (logged; not checked).
+    pub sequence: u64,
+    pub torques: Vec<JointTorque>,
+    pub impulses: Vec<BodyImpulse>,
 }
 
 impl Default for InputFrame {
@@ -441,78 +701,157 @@ impl Default for InputFrame {
             controller_id: 0,
             step: 0,
             sequence: 0,
-            torque_count: 0,
-            impulse_count: 0,
-            torques: [JointTorque::default(); MAX_JOINTS],
-            impulses: [BodyImpulse::default(); MAX_BODIES],
+            torques: Vec::new(),
+            impulses: Vec::new(),
         }
     }
 }
 
-impl UsedEntries for InputFrame {
-    /// The header and the torques and impulses in use (`written.joints`
-    /// and `written.bodies` mark them).
-    fn write_used(&mut self, src: &InputFrame, written: &mut Written) {
-        let &InputFrame {
+impl InputFrame {
+    /// Appends a joint torque.
+    pub fn push_torque(&mut self, joint: u32, torque: [f64; 3]) {
+        self.torques.push(JointTorque {
+            joint,
+            _pad: 0,
+            torque,
+        });
+    }
+    /// Appends a body impulse.
+    pub fn push_impulse(&mut self, body: u32, linear: [f64; 3], angular: [f64; 3]) {
+        self.impulses.push(BodyImpulse {
+            body,
+            _pad: 0,
+            linear,
+            angular,
+        });
+    }
+
+    /// The header of this frame (counts from the entries).
+    pub fn header(&self) -> InputHeader {
+        InputHeader {
+            version: self.version,
+            controller_id: self.controller_id,
+            step: self.step,
+            sequence: self.sequence,
+            torque_count: self.torques.len() as u32,
+            impulse_count: self.impulses.len() as u32,
+        }
+    }
+
+    /// Payload words of this frame.
+    pub fn words(&self) -> usize {
+        input_words(self.torques.len(), self.impulses.len())
+    }
+
+    /// Writes the payload: torques, then impulses.
+    pub fn encode(&self, sink: &mut impl WordSink) {
+        for t in &self.torques {
+            sink.put(pair(t.joint, 0));
+            put_f64s(sink, &t.torque);
+        }
+        for b in &self.impulses {
+            sink.put(pair(b.body, 0));
+            put_f64s(sink, &b.linear);
+            put_f64s(sink, &b.angular);
+        }
+    }
+
+    /// Makes `self` the frame of `header` and `words`, reusing its
+    /// buffers. On a length mismatch the header's fields are taken, the
+    /// entries left empty, and the error says what was missing.
+    pub fn read(&mut self, header: &InputHeader, words: &[u64]) -> Result<(), WireError> {
+        let &InputHeader {
             version,
             controller_id,
             step,
             sequence,
             torque_count,
             impulse_count,
-            torques: _,
-            impulses: _,
-        } = src;
+        } = header;
         self.version = version;
         self.controller_id = controller_id;
         self.step = step;
         self.sequence = sequence;
-        self.torque_count = torque_count;
-        self.impulse_count = impulse_count;
-        write_prefix(
-            &mut self.torques,
-            &src.torques,
-            torque_count as usize,
-            &mut written.joints,
-        );
-        write_prefix(
-            &mut self.impulses,
-            &src.impulses,
-            impulse_count as usize,
-            &mut written.bodies,
-        );
+        self.torques.clear();
+        self.impulses.clear();
+        let (nt, ni) = (torque_count as usize, impulse_count as usize);
+        let expected = TORQUE_WORDS as u128 * nt as u128 + IMPULSE_WORDS as u128 * ni as u128;
+        if expected != words.len() as u128 {
+            return Err(WireError::Length {
+                what: "input frame",
+                expected: usize::try_from(expected).unwrap_or(usize::MAX),
+                got: words.len(),
+            });
+        }
+        let (t, b) = words.split_at(TORQUE_WORDS * nt);
+        self.torques
+            .extend(t.chunks_exact(TORQUE_WORDS).map(|w| JointTorque {
+                joint: split(w[0]).0,
+                _pad: 0,
+                torque: f3(&w[1..4]),
+            }));
+        self.impulses
+            .extend(b.chunks_exact(IMPULSE_WORDS).map(|w| BodyImpulse {
+                body: split(w[0]).0,
+                _pad: 0,
+                linear: f3(&w[1..4]),
+                angular: f3(&w[4..7]),
+            }));
+        Ok(())
+    }
+
+    /// The frame of `header` and `words`.
+    pub fn decode(header: &InputHeader, words: &[u64]) -> Result<InputFrame, WireError> {
+        let mut f = InputFrame::default();
+        f.read(header, words)?;
+        Ok(f)
     }
 }
 
-impl InputFrame {
-    /// Appends a joint torque; false when the frame is full.
-    pub fn push_torque(&mut self, joint: u32, torque: [f64; 3]) -> bool {
-        let i = self.torque_count as usize;
-        if i >= MAX_JOINTS {
-            return false;
-        }
-        self.torques[i] = JointTorque {
-            joint,
-            _pad: 0,
-            torque,
-        };
-        self.torque_count += 1;
-        true
+/// Sends a message of `header` and `len` words that `encode` writes into
+/// the loaned sample (no copy on the way). Fails with
+/// [`SendError::Incomplete`] if `encode` did not write exactly `len` words.
+pub fn send_words<H: core::fmt::Debug + Default + ZeroCopySend>(
+    publisher: &iceoryx2::port::publisher::Publisher<iceoryx2::prelude::ipc::Service, [u64], H>,
+    header: H,
+    len: usize,
+    encode: impl FnOnce(&mut UninitWords<'_>),
+) -> Result<usize, SendError> {
+    let mut sample = publisher.loan_slice_uninit(len).map_err(SendError::Loan)?;
+    *sample.user_header_mut() = header;
+    let mut words = UninitWords::new(sample.payload_mut());
+    encode(&mut words);
+    if !words.filled() {
+        return Err(SendError::Incomplete { words: len });
     }
-    /// Appends a body impulse; false when the frame is full.
-    pub fn push_impulse(&mut self, body: u32, linear: [f64; 3], angular: [f64; 3]) -> bool {
-        let i = self.impulse_count as usize;
-        if i >= MAX_BODIES {
-            return false;
+    // SAFETY: `filled` says every one of the sample's `len` words was
+    // written above (`UninitWords` writes each word it is given into the
+    // next place and counts them), so the payload is initialised.
+    let sample = unsafe { sample.assume_init() };
+    sample.send().map_err(SendError::Send)
+}
+
+/// Why a message could not be sent.
+#[derive(Debug)]
+pub enum SendError {
+    /// The publisher could not loan a sample of that many words.
+    Loan(iceoryx2::port::LoanError),
+    /// The encoder wrote more or fewer words than the sample holds.
+    Incomplete {
+        words: usize,
+    },
+    Send(iceoryx2::port::SendError),
+}
+
+impl core::fmt::Display for SendError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            SendError::Loan(e) => write!(f, "cannot loan a sample: {e:?}"),
+            SendError::Incomplete { words } => {
+                write!(f, "the message did not fill its {words} words")
+            }
+            SendError::Send(e) => write!(f, "cannot send: {e:?}"),
         }
-        self.impulses[i] = BodyImpulse {
-            body,
-            _pad: 0,
-            linear,
-            angular,
-        };
-        self.impulse_count += 1;
-        true
     }
 }
 
@@ -572,7 +911,7 @@ pub const ROLE_MONITOR: u32 = 2;
 
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::ControlRequest.v1")]
+#[type_name("cosim::ControlRequest.v2")]
 pub struct ControlRequest {
     /// [`PROTOCOL_VERSION`].
     pub version: u32,
@@ -605,7 +944,7 @@ pub const MESSAGE_LEN: usize = 120;
 
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("cosim::ControlResponse.v1")]
+#[type_name("cosim::ControlResponse.v2")]
 pub struct ControlResponse {
     pub version: u32,
     /// `RESP_*`.
@@ -693,91 +1032,173 @@ mod tests {
     use super::*;
     use core::mem::{align_of, size_of};
 
-    // The sizes docs/protocol.md states: a change here is a protocol change.
-    /// A frame written entry by entry into reused memory equals its source,
-    /// whatever the counts of the frames written there before.
+    fn state(k: usize, nb: usize, nj: usize, nc: usize) -> StateFrame {
+        let mut x = k as f64;
+        let mut next = || {
+            x += 1.25;
+            x
+        };
+        let mut f = StateFrame {
+            step: k as u64,
+            status: STATUS_CONTACTS_TRUNCATED,
+            contact_count: nc as u32 + 3,
+            residual: next(),
+            ..StateFrame::default()
+        };
+        for _ in 0..nb {
+            let v = next();
+            f.bodies.push(BodyFrame {
+                position: [v, -v, 0.5 * v],
+                orientation: [1.0, 0.0, -0.0, v],
+                linear_velocity: [f64::MIN_POSITIVE, v, 3.0],
+                angular_velocity: [-v, 1e300, 0.0],
+            });
+        }
+        for _ in 0..nj {
+            f.joint_impulses.push([next(); 3]);
+        }
+        for i in 0..nc {
+            let v = next();
+            f.contacts.push(ContactFrame {
+                body_a: i as u32,
+                kind_b: CONTACT_BODY,
+                index_b: u32::MAX - i as u32,
+                id: 7 * i as u32,
+                normal: [0.0, 0.0, v],
+                friction: [v, -v, 0.0],
+            });
+        }
+        f.controllers[k % MAX_CONTROLLERS].id = k as u32 + 1;
+        f
+    }
+
+    /// Encoded and read back into a reused frame, every frame comes back
+    /// to the bit, whatever the sizes of the frames read into it before.
     #[test]
-    fn writing_the_used_entries_equals_a_full_copy() {
-        let mut slots = [StateFrame::default(), StateFrame::default()];
-        let mut inputs = [InputFrame::default(), InputFrame::default()];
-        let (mut w, mut wi) = (Written::default(), Written::default());
-        let mut x = 1.0f64;
+    fn frames_come_back_from_their_words() {
+        let mut back = StateFrame::default();
+        let mut input_back = InputFrame::default();
         for (k, &(nb, nj, nc)) in [
             (2, 2, 5),
             (3, 1, 0),
-            (2, 2, 64),
+            (4000, 0, 16064),
             (1, 0, 70),
-            (2, 2, 3),
             (0, 0, 0),
         ]
         .iter()
         .enumerate()
         {
-            let mut src = StateFrame {
-                step: k as u64,
-                body_count: nb,
-                joint_count: nj,
-                contact_count: nc,
-                residual: x,
-                ..StateFrame::default()
-            };
-            for b in &mut src.bodies[..nb as usize] {
-                x += 1.0;
-                b.position = [x, -x, 0.5 * x];
-            }
-            for j in &mut src.joint_impulses[..nj as usize] {
-                x += 1.0;
-                *j = [x; 3];
-            }
-            for c in &mut src.contacts[..(nc as usize).min(MAX_CONTACTS)] {
-                x += 1.0;
-                c.id = x as u32;
-                c.normal = [0.0, 0.0, x];
-            }
-            src.controllers[k % MAX_CONTROLLERS].id = k as u32 + 1;
-            let dst = &mut slots[k % 2];
-            dst.write_used(&src, &mut w);
-            assert_eq!(*dst, src, "frame {k}");
-            assert_eq!(src.used_copy(), src);
+            let f = state(k, nb, nj, nc);
+            let mut words = Vec::new();
+            f.encode(&mut words);
+            assert_eq!(words.len(), f.words());
+            assert_eq!(words.len(), state_words(nb, nj, nc));
+            back.read(&f.header(), &words).expect("well formed");
+            assert_eq!(back, f, "frame {k}");
 
             let mut input = InputFrame {
                 step: k as u64,
+                controller_id: 3,
                 ..InputFrame::default()
             };
             for i in 0..nj {
-                input.push_torque(i, [x, 0.0, -x]);
+                input.push_torque(i as u32, [1.5, 0.0, -(k as f64)]);
             }
-            for i in 0..nc.min(MAX_BODIES as u32) {
-                input.push_impulse(i, [x; 3], [-x; 3]);
+            for i in 0..nb.min(50) {
+                input.push_impulse(u32::MAX - i as u32, [0.5; 3], [-0.25; 3]);
             }
-            let dst = &mut inputs[k % 2];
-            dst.write_used(&input, &mut wi);
-            assert_eq!(*dst, input, "input {k}");
-            assert_eq!(input.used_copy(), input);
+            let mut words = Vec::new();
+            input.encode(&mut words);
+            assert_eq!(words.len(), input.words());
+            input_back
+                .read(&input.header(), &words)
+                .expect("well formed");
+            assert_eq!(input_back, input, "input {k}");
         }
-        assert_eq!(w.contacts, MAX_CONTACTS);
     }
 
+    /// A header whose counts the words do not match is refused with both
+    /// lengths, its header fields kept (the server names the controller),
+    /// also for counts whose word total overflows.
+    #[test]
+    fn counts_that_do_not_match_the_words_are_refused() {
+        let f = state(1, 2, 1, 3);
+        let mut words = Vec::new();
+        f.encode(&mut words);
+        let mut h = f.header();
+        h.contacts_carried += 1;
+        let err = StateFrame::decode(&h, &words).unwrap_err();
+        assert_eq!(
+            err,
+            WireError::Length {
+                what: "state frame",
+                expected: words.len() + CONTACT_WORDS,
+                got: words.len()
+            }
+        );
+        h.body_count = u32::MAX;
+        h.contacts_carried = u32::MAX;
+        assert!(StateFrame::decode(&h, &words).is_err());
+
+        let mut input = InputFrame {
+            controller_id: 5,
+            step: 9,
+            ..InputFrame::default()
+        };
+        input.push_torque(0, [1.0; 3]);
+        let mut words = Vec::new();
+        input.encode(&mut words);
+        let mut h = input.header();
+        h.torque_count = 1000;
+        let mut back = InputFrame::default();
+        assert!(back.read(&h, &words).is_err());
+        assert_eq!((back.controller_id, back.step), (5, 9));
+        assert!(back.torques.is_empty());
+    }
+
+    /// On a little-endian machine an entry's words are the bytes of its
+    /// `#[repr(C)]` struct, which is what lets C and Python readers view
+    /// the payload as arrays of them (protocol.md).
+    #[test]
+    fn an_entrys_words_are_its_structs_bytes() {
+        let c = ContactFrame {
+            body_a: 1,
+            kind_b: CONTACT_PLANE,
+            index_b: 2,
+            id: 3,
+            normal: [0.5, -1.0, 2.0],
+            friction: [4.0, 0.0, -0.0],
+        };
+        let mut words = Vec::new();
+        c.encode(&mut words);
+        let mut bytes = Vec::new();
+        for v in [c.body_a, c.kind_b, c.index_b, c.id] {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in c.normal.iter().chain(&c.friction) {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        let from_words: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        assert_eq!(from_words, bytes);
+        assert_eq!(size_of::<ContactFrame>(), bytes.len());
+    }
+
+    // The sizes docs/protocol.md states: a change here is a protocol change.
     #[test]
     fn layouts_match_the_protocol_document() {
-        assert_eq!(size_of::<BodyFrame>(), 104);
-        assert_eq!(size_of::<ContactFrame>(), 64);
+        assert_eq!(size_of::<BodyFrame>(), 8 * BODY_WORDS);
+        assert_eq!(size_of::<[f64; 3]>(), 8 * JOINT_WORDS);
+        assert_eq!(size_of::<ContactFrame>(), 8 * CONTACT_WORDS);
+        assert_eq!(size_of::<JointTorque>(), 8 * TORQUE_WORDS);
+        assert_eq!(size_of::<BodyImpulse>(), 8 * IMPULSE_WORDS);
         assert_eq!(size_of::<ControllerSlot>(), 24);
-        assert_eq!(size_of::<JointTorque>(), 32);
-        assert_eq!(size_of::<BodyImpulse>(), 56);
-        assert_eq!(
-            size_of::<StateFrame>(),
-            80 + 104 * MAX_BODIES + 24 * MAX_JOINTS + 64 * MAX_CONTACTS + 24 * MAX_CONTROLLERS
-        );
-        assert_eq!(
-            size_of::<InputFrame>(),
-            32 + 32 * MAX_JOINTS + 56 * MAX_BODIES
-        );
+        assert_eq!(size_of::<StateHeader>(), 88 + 24 * MAX_CONTROLLERS);
+        assert_eq!(size_of::<InputHeader>(), 32);
         assert_eq!(size_of::<ControlRequest>(), 48);
         assert_eq!(size_of::<ControlResponse>(), 80 + MESSAGE_LEN);
         for a in [
-            align_of::<StateFrame>(),
-            align_of::<InputFrame>(),
+            align_of::<StateHeader>(),
+            align_of::<InputHeader>(),
             align_of::<ControlRequest>(),
             align_of::<ControlResponse>(),
         ] {
@@ -786,19 +1207,37 @@ mod tests {
     }
 
     #[test]
+    fn a_big_scenes_state_buffer_fits_the_stream_budget() {
+        assert_eq!(
+            services::state_buffer(state_words(2, 1, 7)),
+            services::MAX_STATE_BUFFER
+        );
+        let big = state_words(4000, 0, contact_capacity(4000, usize::MAX));
+        let n = services::state_buffer(big);
+        assert!((2..16).contains(&n), "{n}");
+        assert!(
+            n * services::MAX_STATE_SUBSCRIBERS * 8 * big <= services::STATE_STREAM_BYTES,
+            "{n}"
+        );
+    }
+
+    #[test]
     fn type_names_carry_the_version() {
         use iceoryx2::prelude::ZeroCopySend;
         // SAFETY: type_name only returns the static name given by the derive.
         let names = unsafe {
             [
-                StateFrame::type_name(),
-                InputFrame::type_name(),
+                StateHeader::type_name(),
+                InputHeader::type_name(),
                 ControlRequest::type_name(),
                 ControlResponse::type_name(),
             ]
         };
         for n in names {
-            assert!(n.starts_with("cosim::") && n.ends_with(".v1"), "{n}");
+            assert!(
+                n.starts_with("cosim::") && n.ends_with(&format!(".v{PROTOCOL_VERSION}")),
+                "{n}"
+            );
         }
     }
 

@@ -21,8 +21,8 @@ use crate::bench::robust::Rng;
 use crate::engine::{Engine, Model};
 use crate::serve::controllers::{self, Limits, Slot};
 use cosim_shared::wire::{
-    ControlRequest, InputFrame, CMD_JOIN, CMD_SHUTDOWN, MAX_BODIES, MAX_JOINTS, PROTOCOL_VERSION,
-    ROLE_CONTROLLER,
+    input_words, ControlRequest, InputFrame, InputHeader, CMD_JOIN, CMD_SHUTDOWN, IMPULSE_WORDS,
+    PROTOCOL_VERSION, ROLE_CONTROLLER, TORQUE_WORDS,
 };
 use cosim_shared::Scene;
 use nalgebra::Vector3;
@@ -394,8 +394,15 @@ fn index(rng: &mut Rng, n: usize) -> u32 {
     }
 }
 
-/// A random input frame for step `step` from controller `id`.
-pub fn input_frame(rng: &mut Rng, id: u32, step: u64, joints: usize, bodies: usize) -> InputFrame {
+/// A random input message for step `step` from controller `id`: its
+/// header and payload words, as a client could send them.
+pub fn input_frame(
+    rng: &mut Rng,
+    id: u32,
+    step: u64,
+    joints: usize,
+    bodies: usize,
+) -> (InputHeader, Vec<u64>) {
     // Half the frames are well formed but for their values (finite, some
     // huge or denormal): the ones that reach the engine.
     if rng.uniform() < 0.5 {
@@ -406,10 +413,7 @@ pub fn input_frame(rng: &mut Rng, id: u32, step: u64, joints: usize, bodies: usi
         };
         for _ in 0..rng.below(joints + 1) {
             let j = rng.below(joints) as u32;
-            if f.torques[..f.torque_count as usize]
-                .iter()
-                .all(|t| t.joint != j)
-            {
+            if f.torques.iter().all(|t| t.joint != j) {
                 let t = [finite(rng), finite(rng), finite(rng)];
                 f.push_torque(j, t);
             }
@@ -419,9 +423,11 @@ pub fn input_frame(rng: &mut Rng, id: u32, step: u64, joints: usize, bodies: usi
             let a = [finite(rng), finite(rng), finite(rng)];
             f.push_impulse(rng.below(bodies) as u32, l, a);
         }
-        return f;
+        let mut words = Vec::new();
+        f.encode(&mut words);
+        return (f.header(), words);
     }
-    let mut f = InputFrame {
+    let header = InputHeader {
         version: if rng.uniform() < 0.9 {
             PROTOCOL_VERSION
         } else {
@@ -438,22 +444,35 @@ pub fn input_frame(rng: &mut Rng, id: u32, step: u64, joints: usize, bodies: usi
             (rng.uniform() * u64::MAX as f64) as u64
         },
         sequence: (rng.uniform() * u64::MAX as f64) as u64,
-        ..Default::default()
+        torque_count: index(rng, joints + 1),
+        impulse_count: index(rng, bodies + 1),
     };
-    // Entries are filled past the counts too: a decoder must read only
-    // what the counts cover.
-    for t in f.torques.iter_mut() {
-        t.joint = index(rng, joints);
-        t.torque = [float(rng), float(rng), float(rng)];
+    // Mostly as many words as the counts say, else a few more or fewer:
+    // a decoder must refuse a mismatch and read nothing past the words.
+    let exact = input_words(
+        (header.torque_count as usize).min(64),
+        (header.impulse_count as usize).min(64),
+    );
+    let len = match rng.below(4) {
+        0 => rng.below(exact + 8),
+        _ => exact,
+    };
+    let mut words = Vec::with_capacity(len);
+    for i in 0..len {
+        // The first word of an entry holds an index, the rest numbers.
+        let torques = TORQUE_WORDS * header.torque_count as usize;
+        let first = if i < torques {
+            i.is_multiple_of(TORQUE_WORDS)
+        } else {
+            (i - torques).is_multiple_of(IMPULSE_WORDS)
+        };
+        words.push(if first {
+            u64::from(index(rng, joints.max(bodies)))
+        } else {
+            float(rng).to_bits()
+        });
     }
-    for b in f.impulses.iter_mut() {
-        b.body = index(rng, bodies);
-        b.linear = [float(rng), float(rng), float(rng)];
-        b.angular = [float(rng), float(rng), float(rng)];
-    }
-    f.torque_count = index(rng, MAX_JOINTS.min(joints + 1));
-    f.impulse_count = index(rng, MAX_BODIES.min(bodies + 1));
-    f
+    (header, words)
 }
 
 /// A random control request: every field drawn from small, boundary and
@@ -504,16 +523,18 @@ pub fn inputs(seed: u64, n: u64) -> Counts {
         joints: engine.model().joints.len(),
         bodies: engine.model().bodies.len(),
     };
-    let mut slot = Slot::new(1, 7, 0);
+    let mut slot = Slot::new(1, 7, 0, lim.joints);
     let mut rng = Rng::new(seed);
+    let mut f = InputFrame::default();
     let hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(|_| {}));
     for _ in 0..n {
         counts.cases += 1;
         let k = engine.state().step;
-        let f = input_frame(&mut rng, 1, k, lim.joints, lim.bodies);
+        let (header, words) = input_frame(&mut rng, 1, k, lim.joints, lim.bodies);
         let outcome = catch_unwind(AssertUnwindSafe(|| {
-            match controllers::check(&f, Some(&slot), k, lim) {
+            let well_formed = f.read(&header, &words).is_ok();
+            match controllers::check(&f, well_formed, Some(&slot), k, lim) {
                 Err(_) => return Ok(false),
                 Ok(()) => controllers::accept(&f, &mut slot, k),
             }
@@ -536,7 +557,9 @@ pub fn inputs(seed: u64, n: u64) -> Counts {
         }));
         match outcome {
             Err(_) => {
-                counts.defects.push(format!("checking panicked on {f:?}"));
+                counts
+                    .defects
+                    .push(format!("checking panicked on {header:?} {words:?}"));
                 continue;
             }
             Ok(Err(m)) => {
@@ -575,7 +598,7 @@ pub fn inputs(seed: u64, n: u64) -> Counts {
         // state: the next inputs test the decoder, not a state already lost.
         if !ok || rng.uniform() < 0.01 {
             engine.set_state(initial.clone());
-            slot = Slot::new(1, 7, 0);
+            slot = Slot::new(1, 7, 0, lim.joints);
         }
     }
     std::panic::set_hook(hook);

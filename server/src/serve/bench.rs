@@ -16,7 +16,7 @@
 use super::{epoch_seconds, serve, ServeOptions};
 use crate::engine::{Engine, Model};
 use cosim_client::{Controller, InputFrame, Monitor, WaitMode};
-use cosim_shared::wire::StateFrame;
+use cosim_shared::wire::{send_words, InputHeader, StateFrame, StateHeader, WordSink};
 use iceoryx2::prelude::*;
 use std::io::{Read, Write};
 use std::process::{Child, Command, Stdio};
@@ -100,13 +100,13 @@ struct PingPong {
     _node: Node<ipc::Service>,
     ping: iceoryx2::service::port_factory::publish_subscribe::PortFactory<
         ipc::Service,
-        StateFrame,
-        (),
+        [u64],
+        StateHeader,
     >,
     pong: iceoryx2::service::port_factory::publish_subscribe::PortFactory<
         ipc::Service,
-        InputFrame,
-        (),
+        [u64],
+        InputHeader,
     >,
     ping_ev: iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
     pong_ev: iceoryx2::service::port_factory::event::PortFactory<ipc::Service>,
@@ -124,12 +124,14 @@ impl PingPong {
         Ok(PingPong {
             ping: node
                 .service_builder(&svc(&format!("{base}/ping"))?)
-                .publish_subscribe::<StateFrame>()
+                .publish_subscribe::<[u64]>()
+                .user_header::<StateHeader>()
                 .open_or_create()
                 .map_err(e)?,
             pong: node
                 .service_builder(&svc(&format!("{base}/pong"))?)
-                .publish_subscribe::<InputFrame>()
+                .publish_subscribe::<[u64]>()
+                .user_header::<InputHeader>()
                 .open_or_create()
                 .map_err(e)?,
             ping_ev: event("ping-ev")?,
@@ -153,17 +155,25 @@ fn idle(mode: WaitMode, listen: &iceoryx2::port::listener::Listener<ipc::Service
 fn ponger(base: &str, mode: WaitMode) -> Result<(), BoxError> {
     let p = PingPong::open(base)?;
     let sub = p.ping.subscriber_builder().create().map_err(e)?;
-    let publ = p.pong.publisher_builder().create().map_err(e)?;
+    let publ = p
+        .pong
+        .publisher_builder()
+        .initial_max_slice_len(1)
+        .create()
+        .map_err(e)?;
     let listen = p.ping_ev.listener_builder().create().map_err(e)?;
     let notify = p.pong_ev.notifier_builder().create().map_err(e)?;
     let mut reply = InputFrame::default();
+    let mut got = StateFrame::default();
     loop {
         if let Some(s) = sub.receive().map_err(e)? {
-            if s.payload().step == u64::MAX {
+            // Read as a controller reads a frame.
+            got.read(s.user_header(), s.payload()).map_err(e)?;
+            if got.step == u64::MAX {
                 return Ok(());
             }
-            reply.step = s.payload().step;
-            publ.send_copy(reply).map_err(e)?;
+            reply.step = got.step;
+            send_words(&publ, reply.header(), reply.words(), |w| reply.encode(w)).map_err(e)?;
             notify.notify().map_err(e)?;
             continue;
         }
@@ -175,18 +185,30 @@ fn ponger(base: &str, mode: WaitMode) -> Result<(), BoxError> {
 fn raw_pingpong(mode: WaitMode, n: usize) -> Result<f64, BoxError> {
     let base = format!("cosim-bench-{}-{}", std::process::id(), mode.as_str());
     let p = PingPong::open(&base)?;
-    let out = p.ping.publisher_builder().create().map_err(e)?;
+    // The reference scene's frame as the server publishes it.
+    let engine = Engine::new(Model::from_scene(&crate::scenes::reference()?));
+    let capacity = super::frame::contact_capacity(engine.model());
+    let mut frame = StateFrame::default();
+    super::frame::fill(&mut frame, &engine, None, capacity);
+    let out = p
+        .ping
+        .publisher_builder()
+        .initial_max_slice_len(super::frame::max_words(engine.model()))
+        .create()
+        .map_err(e)?;
     let inp = p.pong.subscriber_builder().create().map_err(e)?;
+    let send = |frame: &StateFrame| {
+        send_words(&out, frame.header(), frame.words(), |w| frame.encode(w)).map_err(e)
+    };
     let notify = p.ping_ev.notifier_builder().create().map_err(e)?;
     let listen = p.pong_ev.listener_builder().create().map_err(e)?;
     let _peer = peer(&["pong", "--name", &base, "--wait", mode.as_str()])?;
-    let mut frame = StateFrame::default();
     let mut times = Vec::with_capacity(n);
     // Until the ponger is subscribed, pings are lost: resend until a pong.
     let start = Instant::now();
     'warm: loop {
         frame.step = 0;
-        out.send_copy(frame).map_err(e)?;
+        send(&frame)?;
         notify.notify().map_err(e)?;
         let t = Instant::now();
         while t.elapsed() < Duration::from_millis(20) {
@@ -201,11 +223,11 @@ fn raw_pingpong(mode: WaitMode, n: usize) -> Result<f64, BoxError> {
     for k in 1..=n as u64 {
         frame.step = k;
         let t0 = Instant::now();
-        out.send_copy(frame).map_err(e)?;
+        send(&frame)?;
         notify.notify().map_err(e)?;
         loop {
             if let Some(s) = inp.receive().map_err(e)? {
-                if s.payload().step == k {
+                if s.user_header().step == k {
                     break;
                 }
                 continue;
@@ -215,7 +237,7 @@ fn raw_pingpong(mode: WaitMode, n: usize) -> Result<f64, BoxError> {
         times.push(t0.elapsed().as_secs_f64() * 1e6);
     }
     frame.step = u64::MAX;
-    out.send_copy(frame).map_err(e)?;
+    send(&frame)?;
     Ok(median(&mut times))
 }
 
@@ -396,17 +418,19 @@ fn tcp_lockstep(steps: u64) -> Result<(f64, f64, f64, f64), BoxError> {
     let (mut sock, _) = listener.accept()?;
     sock.set_nodelay(true)?;
     let mut engine = Engine::new(Model::from_scene(&crate::scenes::reference()?));
-    let mut frame = Box::<StateFrame>::default();
-    let mut input = vec![0u8; std::mem::size_of::<InputFrame>()];
+    let capacity = super::frame::contact_capacity(engine.model());
+    let mut frame = StateFrame::default();
+    let mut bytes = Vec::new();
+    let mut input = vec![0u8; input_bytes()];
     let mut times = Vec::with_capacity(steps as usize);
     let mut compute = 0.0;
     let mut step_walls = Vec::with_capacity(steps as usize);
     let start = Instant::now();
     for _ in 0..steps {
         let top = Instant::now();
-        super::frame::fill(&mut frame, &engine, None);
+        super::frame::fill(&mut frame, &engine, None, capacity);
         let t0 = Instant::now();
-        sock.write_all(state_bytes(&frame))?;
+        sock.write_all(state_bytes(&frame, &mut bytes))?;
         sock.read_exact(&mut input)?;
         times.push(t0.elapsed().as_secs_f64() * 1e6);
         let t1 = Instant::now();
@@ -424,16 +448,28 @@ fn tcp_lockstep(steps: u64) -> Result<(f64, f64, f64, f64), BoxError> {
     ))
 }
 
-fn state_bytes(f: &StateFrame) -> &[u8] {
-    // SAFETY: StateFrame is #[repr(C)], Copy, made of u32/u64/f64 fields
-    // with explicit padding only (see the layout test in wire.rs), so every
-    // byte is initialised; the slice borrows `f` for its lifetime.
-    unsafe {
-        std::slice::from_raw_parts(
-            (f as *const StateFrame).cast::<u8>(),
-            std::mem::size_of::<StateFrame>(),
-        )
+/// A state frame as a socket carries it: its length, a header's worth
+/// of bytes (the step first) and the payload words, as many bytes as the
+/// shared-memory message has.
+fn state_bytes<'a>(f: &StateFrame, out: &'a mut Vec<u8>) -> &'a [u8] {
+    struct Bytes<'b>(&'b mut Vec<u8>);
+    impl WordSink for Bytes<'_> {
+        fn put(&mut self, word: u64) {
+            self.0.extend_from_slice(&word.to_le_bytes());
+        }
     }
+    out.clear();
+    let len = std::mem::size_of::<StateHeader>() + 8 * f.words();
+    out.extend_from_slice(&(len as u64).to_le_bytes());
+    out.extend_from_slice(&f.step.to_le_bytes());
+    out.resize(8 + std::mem::size_of::<StateHeader>(), 0);
+    f.encode(&mut Bytes(out));
+    out
+}
+
+/// An empty input as a socket carries it: a header's worth of bytes.
+fn input_bytes() -> usize {
+    std::mem::size_of::<InputHeader>()
 }
 
 /// `bench-peer`: the other process of each measurement.
@@ -443,9 +479,9 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
         "controller" => {
             let patience = Duration::from_secs(30);
             let mut c = cosim_client::when_up(patience, || Controller::join(name, mode))?;
-            let input = InputFrame::default();
+            let mut input = InputFrame::default();
             while c.next_state_ref(Duration::from_secs(30)).is_ok() {
-                c.send(input)?;
+                c.send_ref(&mut input)?;
             }
             Ok(())
         }
@@ -490,17 +526,14 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
         "tcp" => {
             let mut sock = std::net::TcpStream::connect(("127.0.0.1", name.parse::<u16>()?))?;
             sock.set_nodelay(true)?;
-            let mut state = vec![0u8; std::mem::size_of::<StateFrame>()];
-            let reply = InputFrame::default();
-            // SAFETY: as state_bytes: InputFrame is #[repr(C)] plain data.
-            let reply = unsafe {
-                std::slice::from_raw_parts(
-                    (&reply as *const InputFrame).cast::<u8>(),
-                    std::mem::size_of::<InputFrame>(),
-                )
-            };
-            while sock.read_exact(&mut state).is_ok() {
-                sock.write_all(reply)?;
+            let mut len = [0u8; 8];
+            let mut state = Vec::new();
+            let reply = vec![0u8; input_bytes()];
+            while sock.read_exact(&mut len).is_ok() {
+                let n = usize::try_from(u64::from_le_bytes(len))?;
+                state.resize(n, 0);
+                sock.read_exact(&mut state)?;
+                sock.write_all(&reply)?;
             }
             Ok(())
         }

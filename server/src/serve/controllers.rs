@@ -76,8 +76,9 @@ pub struct Slot {
     /// its node that sent with its id (see [`owns`]).
     pub publisher: Option<u128>,
     pub pid: u64,
-    /// Torques this controller holds, by joint (None: never set).
-    pub held: [Option<[f64; 3]>; MAX_JOINTS],
+    /// Torques this controller holds, by joint (None: never set); sized
+    /// to the model's joints when it joins.
+    pub held: Vec<Option<[f64; 3]>>,
     /// Impulses for the coming step.
     pub impulses: Vec<BodyImpulse>,
     /// The step it answered last.
@@ -95,14 +96,15 @@ pub struct Slot {
 }
 
 impl Slot {
-    pub fn new(id: u32, node_id: u128, pid: u64) -> Slot {
+    /// A slot for a scene of `joints` joints.
+    pub fn new(id: u32, node_id: u128, pid: u64, joints: usize) -> Slot {
         Slot {
             id,
             node_id,
             publisher: None,
             pid,
-            held: [None; MAX_JOINTS],
-            impulses: Vec::with_capacity(MAX_BODIES),
+            held: vec![None; joints],
+            impulses: Vec::new(),
             answered: None,
             misses: 0,
             rejected: 0,
@@ -140,9 +142,11 @@ pub struct Rejection {
     pub answered: bool,
 }
 
-/// Checks an input for step `step` from the controller in `slot`.
+/// Checks an input for step `step` from the controller in `slot`;
+/// `well_formed` says whether its words matched its header's counts.
 pub fn check(
     input: &InputFrame,
+    well_formed: bool,
     slot: Option<&Slot>,
     step: u64,
     lim: Limits,
@@ -164,12 +168,11 @@ pub fn check(
     if input.step != step {
         return reject(REJECT_WRONG_STEP, false);
     }
-    let (nt, ni) = (input.torque_count as usize, input.impulse_count as usize);
-    if nt > MAX_JOINTS || ni > MAX_BODIES {
+    if !well_formed {
         return reject(REJECT_BAD_COUNT, true);
     }
-    let torques = &input.torques[..nt];
-    let impulses = &input.impulses[..ni];
+    let torques = &input.torques[..];
+    let impulses = &input.impulses[..];
     if torques.iter().any(|t| t.joint as usize >= lim.joints)
         || impulses.iter().any(|b| b.body as usize >= lim.bodies)
     {
@@ -210,12 +213,13 @@ pub fn owns(slot: &mut Slot, origin: u128, node_of: impl FnOnce(u128) -> Option<
 
 /// Takes a checked input into the slot.
 pub fn accept(input: &InputFrame, slot: &mut Slot, step: u64) {
-    for t in &input.torques[..input.torque_count as usize] {
-        slot.held[t.joint as usize] = Some(t.torque);
+    for t in &input.torques {
+        if let Some(h) = slot.held.get_mut(t.joint as usize) {
+            *h = Some(t.torque);
+        }
     }
     slot.impulses.clear();
-    slot.impulses
-        .extend_from_slice(&input.impulses[..input.impulse_count as usize]);
+    slot.impulses.extend_from_slice(&input.impulses);
     slot.answered = Some(step);
     slot.misses = 0;
 }
@@ -226,7 +230,7 @@ pub fn net_torque(slots: &[Slot], j: usize, scene: [f64; 3]) -> [f64; 3] {
     let mut any = false;
     let mut sum = [0.0; 3];
     for s in slots {
-        if let Some(t) = s.held[j] {
+        if let Some(&Some(t)) = s.held.get(j) {
             any = true;
             for k in 0..3 {
                 sum[k] += t[k];
@@ -254,7 +258,7 @@ mod tests {
 
     #[test]
     fn a_slot_takes_inputs_from_the_publisher_of_the_node_that_joined() {
-        let mut slot = Slot::new(1, 77, 0);
+        let mut slot = Slot::new(1, 77, 0, 2);
         // A publisher of another node is refused and binds nothing.
         assert!(!owns(&mut slot, 5, |_| Some(78)));
         assert!(!owns(&mut slot, 5, |_| None));
@@ -289,70 +293,81 @@ mod tests {
 
     #[test]
     fn each_bad_input_is_rejected_with_its_reason() {
-        let slot = Slot::new(1, 0, 0);
-        assert_eq!(check(&input(5), Some(&slot), 5, LIM), Ok(()));
+        let slot = Slot::new(1, 0, 0, 2);
+        assert_eq!(check(&input(5), true, Some(&slot), 5, LIM), Ok(()));
         assert_eq!(
-            reason(check(&input(5), None, 5, LIM)),
+            reason(check(&input(5), true, None, 5, LIM)),
             REJECT_UNKNOWN_CONTROLLER
         );
         assert_eq!(
-            reason(check(&input(4), Some(&slot), 5, LIM)),
+            reason(check(&input(4), true, Some(&slot), 5, LIM)),
             REJECT_WRONG_STEP
         );
         let mut v = input(5);
         v.version = 99;
-        assert_eq!(reason(check(&v, Some(&slot), 5, LIM)), REJECT_VERSION);
+        assert_eq!(reason(check(&v, true, Some(&slot), 5, LIM)), REJECT_VERSION);
         let mut nan = input(5);
         nan.torques[0].torque[1] = f64::NAN;
-        assert_eq!(reason(check(&nan, Some(&slot), 5, LIM)), REJECT_NON_FINITE);
+        assert_eq!(
+            reason(check(&nan, true, Some(&slot), 5, LIM)),
+            REJECT_NON_FINITE
+        );
         let mut inf = input(5);
         inf.impulses[0].angular[2] = f64::INFINITY;
-        assert_eq!(reason(check(&inf, Some(&slot), 5, LIM)), REJECT_NON_FINITE);
+        assert_eq!(
+            reason(check(&inf, true, Some(&slot), 5, LIM)),
+            REJECT_NON_FINITE
+        );
         let mut joint = input(5);
         joint.torques[0].joint = 2;
         assert_eq!(
-            reason(check(&joint, Some(&slot), 5, LIM)),
+            reason(check(&joint, true, Some(&slot), 5, LIM)),
             REJECT_UNKNOWN_INDEX
         );
         let mut body = input(5);
         body.impulses[0].body = 7;
         assert_eq!(
-            reason(check(&body, Some(&slot), 5, LIM)),
+            reason(check(&body, true, Some(&slot), 5, LIM)),
             REJECT_UNKNOWN_INDEX
         );
         let mut twice = input(5);
         twice.push_torque(0, [0.0; 3]);
-        assert_eq!(reason(check(&twice, Some(&slot), 5, LIM)), REJECT_DUPLICATE);
-        let mut count = input(5);
-        count.torque_count = 1000;
-        assert_eq!(reason(check(&count, Some(&slot), 5, LIM)), REJECT_BAD_COUNT);
+        assert_eq!(
+            reason(check(&twice, true, Some(&slot), 5, LIM)),
+            REJECT_DUPLICATE
+        );
+        let count = input(5);
+        assert_eq!(
+            reason(check(&count, false, Some(&slot), 5, LIM)),
+            REJECT_BAD_COUNT
+        );
     }
 
     #[test]
     fn a_second_answer_to_a_step_is_a_duplicate() {
-        let mut slot = Slot::new(1, 0, 0);
+        let mut slot = Slot::new(1, 0, 0, 2);
         accept(&input(5), &mut slot, 5);
         assert_eq!(
-            reason(check(&input(5), Some(&slot), 5, LIM)),
+            reason(check(&input(5), true, Some(&slot), 5, LIM)),
             REJECT_DUPLICATE
         );
-        assert_eq!(check(&input(6), Some(&slot), 6, LIM), Ok(()));
+        assert_eq!(check(&input(6), true, Some(&slot), 6, LIM), Ok(()));
         // Read in the next step's wait: still a duplicate, not a wrong step.
         assert_eq!(
-            reason(check(&input(5), Some(&slot), 6, LIM)),
+            reason(check(&input(5), true, Some(&slot), 6, LIM)),
             REJECT_DUPLICATE
         );
         // A step it never answered: a wrong step.
         assert_eq!(
-            reason(check(&input(3), Some(&slot), 6, LIM)),
+            reason(check(&input(3), true, Some(&slot), 6, LIM)),
             REJECT_WRONG_STEP
         );
     }
 
     #[test]
     fn torques_are_held_summed_and_fall_back_to_the_scene() {
-        let mut a = Slot::new(1, 0, 0);
-        let mut b = Slot::new(2, 0, 0);
+        let mut a = Slot::new(1, 0, 0, 2);
+        let mut b = Slot::new(2, 0, 0, 2);
         accept(&input(0), &mut a, 0);
         let mut other = InputFrame::default();
         other.push_torque(0, [0.5, 0.0, 0.0]);
@@ -364,7 +379,7 @@ mod tests {
 
     #[test]
     fn the_zero_policy_zeroes_and_hold_keeps() {
-        let mut s = Slot::new(1, 0, 0);
+        let mut s = Slot::new(1, 0, 0, 2);
         accept(&input(0), &mut s, 0);
         s.apply_miss(MissPolicy::Hold);
         assert_eq!(s.held[0], Some([1.0, 2.0, 3.0]));

@@ -2,31 +2,47 @@
 //! hash of replay.
 
 use crate::engine::{solver::LemkeError, StepError};
-use crate::engine::{Engine, ImpulseKind, Party, StepReport};
+use crate::engine::{Engine, ImpulseKind, Model, Party, StepReport};
 use cosim_shared::wire::*;
 
-/// Fills `f` with the engine's state and last impulses. Status bits and
-/// controller slots are the server's to set.
-pub fn fill(f: &mut StateFrame, engine: &Engine, report: Option<&StepReport>) {
+/// The contacts a state frame of this model carries at most.
+pub fn contact_capacity(model: &Model) -> usize {
+    cosim_shared::wire::contact_capacity(model.bodies.len(), model.potential_contacts())
+}
+
+/// The most payload words a state frame of this model takes.
+pub fn max_words(model: &Model) -> usize {
+    state_words(
+        model.bodies.len(),
+        model.joints.len(),
+        contact_capacity(model),
+    )
+}
+
+/// Fills `f` with the engine's state and last impulses, carrying up to
+/// `capacity` contacts. Status bits and controller slots are the server's
+/// to set. The frame's buffers are reused: after the first frame of the
+/// largest size, filling allocates nothing.
+pub fn fill(f: &mut StateFrame, engine: &Engine, report: Option<&StepReport>, capacity: usize) {
     let s = engine.state();
     let model = engine.model();
     f.version = PROTOCOL_VERSION;
     f.step = s.step;
     f.sim_time = s.t;
     f.dt = model.params.h;
-    f.body_count = s.bodies.len() as u32;
-    f.joint_count = model.joints.len() as u32;
-    for (out, b) in f.bodies.iter_mut().zip(&s.bodies) {
+    f.bodies.clear();
+    f.bodies.extend(s.bodies.iter().map(|b| {
         let q = b.q.quaternion();
-        *out = BodyFrame {
+        BodyFrame {
             position: b.x.into(),
             orientation: [q.w, q.i, q.j, q.k],
             linear_velocity: b.v.into(),
             angular_velocity: b.w.into(),
-        };
-    }
-    f.joint_impulses = [[0.0; 3]; MAX_JOINTS];
-    f.contacts = [ContactFrame::default(); MAX_CONTACTS];
+        }
+    }));
+    f.joint_impulses.clear();
+    f.joint_impulses.resize(model.joints.len(), [0.0; 3]);
+    f.contacts.clear();
     let mut contacts = 0usize;
     let mut last_id = None;
     for r in engine.impulses() {
@@ -42,8 +58,14 @@ pub fn fill(f: &mut StateFrame, engine: &Engine, report: Option<&StepReport>) {
                 if last_id != Some(r.index) {
                     last_id = Some(r.index);
                     contacts += 1;
+                    if contacts <= capacity {
+                        f.contacts.push(ContactFrame::default());
+                    }
                 }
-                let Some(c) = f.contacts.get_mut(contacts - 1) else {
+                if contacts > capacity {
+                    continue;
+                }
+                let Some(c) = f.contacts.last_mut() else {
                     continue;
                 };
                 c.id = r.index as u32;
@@ -64,7 +86,7 @@ pub fn fill(f: &mut StateFrame, engine: &Engine, report: Option<&StepReport>) {
         }
     }
     f.contact_count = contacts as u32;
-    if contacts > MAX_CONTACTS {
+    if contacts > capacity {
         f.status |= STATUS_CONTACTS_TRUNCATED;
     }
     if let Some(r) = report {

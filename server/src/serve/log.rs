@@ -75,14 +75,14 @@ impl Logs {
     /// One input frame: a row per torque and impulse with `status` (
     /// `applied`, or the reason it was rejected), so that a rejected input
     /// keeps the values sent (issue 15: it kept only the reason). A frame
-    /// with neither gets one row without values; counts beyond the arrays
-    /// (a `bad_count` frame) are cut to them.
+    /// with neither gets one row without values (so does a `bad_count`
+    /// frame, whose words did not match its counts).
     pub fn input(&mut self, f: &InputFrame, status: &str) -> io::Result<()> {
         let head = format!("{},{},{},{status}", f.step, f.controller_id, f.sequence);
-        if f.torque_count == 0 && f.impulse_count == 0 {
+        if f.torques.is_empty() && f.impulses.is_empty() {
             return writeln!(self.inputs, "{head},,,,,,,,");
         }
-        for t in &f.torques[..(f.torque_count as usize).min(f.torques.len())] {
+        for t in &f.torques {
             writeln!(
                 self.inputs,
                 "{head},torque,{},{},{},{},,,",
@@ -92,7 +92,7 @@ impl Logs {
                 num(t.torque[2])
             )?;
         }
-        for b in &f.impulses[..(f.impulse_count as usize).min(f.impulses.len())] {
+        for b in &f.impulses {
             write!(self.inputs, "{head},impulse,{}", b.body)?;
             for v in b.linear.iter().chain(&b.angular) {
                 write!(self.inputs, ",{}", num(*v))?;

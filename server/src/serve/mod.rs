@@ -103,10 +103,9 @@ pub enum Ending {
 #[derive(Debug)]
 pub enum ServeError {
     Services(ServiceError),
-    /// The scene is larger than the wire types carry.
+    /// The scene's state frame is larger than a served scene's may be.
     TooLarge {
-        what: &'static str,
-        count: usize,
+        bytes: usize,
         max: usize,
     },
     Io(std::io::Error),
@@ -116,9 +115,9 @@ impl std::fmt::Display for ServeError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             ServeError::Services(e) => write!(f, "{e}"),
-            ServeError::TooLarge { what, count, max } => write!(
+            ServeError::TooLarge { bytes, max } => write!(
                 f,
-                "the scene has {count} {what}; a served scene may have at most {max} (the wire types' fixed size)"
+                "the scene's state frame takes {bytes} bytes; a served scene's may take at most {max} (its bodies, joints and contacts, see docs/protocol.md)"
             ),
             ServeError::Io(e) => write!(f, "{e}"),
         }
@@ -228,7 +227,12 @@ struct Server {
     /// Requests that change the state wait for the step boundary.
     deferred: Vec<Request>,
     shutdown: bool,
-    frame: Box<StateFrame>,
+    /// The frame published last; its buffers are reused.
+    frame: StateFrame,
+    /// Contacts a frame carries at most (`wire::contact_capacity`).
+    contact_capacity: usize,
+    /// The input read last; its buffers are reused.
+    input: InputFrame,
     /// When the step loop started (after the controllers joined).
     stepping: Option<Instant>,
     sequence: u64,
@@ -253,19 +257,20 @@ struct Server {
 pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64), ServeError> {
     let mut model = Model::from_scene(scene);
     model.params.fallback = opts.on_failure == controllers::FailurePolicy::Continue;
-    for (what, count, max) in [
-        ("bodies", model.bodies.len(), MAX_BODIES),
-        ("joints", model.joints.len(), MAX_JOINTS),
-    ] {
-        if count > max {
-            return Err(ServeError::TooLarge { what, count, max });
-        }
+    let frame_words = frame::max_words(&model);
+    let bytes = std::mem::size_of::<StateHeader>() + 8 * frame_words;
+    if bytes > MAX_FRAME_BYTES {
+        return Err(ServeError::TooLarge {
+            bytes,
+            max: MAX_FRAME_BYTES,
+        });
     }
+    let contact_capacity = frame::contact_capacity(&model);
     let toml = scene.to_toml();
     // NOTE: the name first: a server refused because another of its name
     // runs must not touch that one's folder (issue 15: a refused server
     // rewrote scene.toml and the first run's replay failed at step 1).
-    let svc = Services::create(&opts.name, opts.publish_every.is_some())?;
+    let svc = Services::create(&opts.name, opts.publish_every.is_some(), frame_words)?;
     if let Some(out) = &opts.out {
         std::fs::create_dir_all(out)?;
         std::fs::write(out.join("scene.toml"), &toml)?;
@@ -297,7 +302,9 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         budget: None,
         deferred: Vec::new(),
         shutdown: false,
-        frame: Box::default(),
+        frame: StateFrame::default(),
+        contact_capacity,
+        input: InputFrame::default(),
         stepping: None,
         sequence: 0,
         status: 0,
@@ -496,7 +503,7 @@ impl Server {
     /// Publishes the current state with the current status.
     fn publish(&mut self) -> Result<(), ServeError> {
         self.sequence += 1;
-        let f = &mut *self.frame;
+        let f = &mut self.frame;
         f.status = self.status;
         if self.opts.wait == WaitMode::Spin {
             f.status |= STATUS_SERVER_SPINS;
@@ -504,7 +511,12 @@ impl Server {
         if self.paused {
             f.status |= STATUS_PAUSED;
         }
-        frame::fill(f, &self.engine, self.last_report.as_ref());
+        frame::fill(
+            f,
+            &self.engine,
+            self.last_report.as_ref(),
+            self.contact_capacity,
+        );
         f.sequence = self.sequence;
         f.model_hash = self.model_hash;
         f.controller_count = self.slots.len() as u32;
@@ -571,11 +583,7 @@ impl Server {
             // receive reads the connection's cache lines, which the
             // controller's core owns: about 0.2 us here).
             let mut done = all_answered(&self.slots);
-            while !done {
-                let Some((input, origin)) = self.svc.receive_input()? else {
-                    break;
-                };
-                self.take_input(&input, origin, k)?;
+            while !done && self.next_input(k)? {
                 done = all_answered(&self.slots);
             }
             if done {
@@ -710,15 +718,38 @@ impl Server {
     /// Logs every input still queued as `after_end` (the run took no
     /// further step) and counts it under that reason.
     fn drain_inputs(&mut self) {
-        while let Ok(Some((input, _))) = self.svc.receive_input() {
+        while let Ok(Some(_)) = self.svc.receive_input(&mut self.input) {
             *self.c.inputs_rejected.entry("after_end").or_default() += 1;
             if let Some(f) = self.files.as_mut() {
-                let _ = f.logs.input(&input, "after_end");
+                let _ = f.logs.input(&self.input, "after_end");
             }
         }
     }
 
-    fn take_input(&mut self, input: &InputFrame, origin: u128, k: u64) -> Result<(), ServeError> {
+    /// Takes the next input of the buffer for step `k`, if there is one.
+    fn next_input(&mut self, k: u64) -> Result<bool, ServeError> {
+        let mut input = std::mem::take(&mut self.input);
+        let got = self.svc.receive_input(&mut input);
+        let taken = match got {
+            Ok(Some((origin, read))) => self
+                .take_input(&input, origin, read.is_ok(), k)
+                .map(|()| true),
+            Ok(None) => Ok(false),
+            Err(e) => Err(e.into()),
+        };
+        self.input = input;
+        taken
+    }
+
+    /// Takes `input` from publisher `origin`; `well_formed` says whether
+    /// its words matched its header's counts.
+    fn take_input(
+        &mut self,
+        input: &InputFrame,
+        origin: u128,
+        well_formed: bool,
+        k: u64,
+    ) -> Result<(), ServeError> {
         let lim = controllers::Limits {
             joints: self.engine.model().joints.len(),
             bodies: self.engine.model().bodies.len(),
@@ -747,7 +778,7 @@ impl Server {
                 return Ok(());
             }
         }
-        match controllers::check(input, idx.map(|i| &self.slots[i]), k, lim) {
+        match controllers::check(input, well_formed, idx.map(|i| &self.slots[i]), k, lim) {
             Ok(()) => {
                 if let Some(i) = idx {
                     controllers::accept(input, &mut self.slots[i], k);
@@ -963,9 +994,7 @@ impl Server {
                     // now; an answer to the coming step still applies to
                     // it, and the slot goes after that step.
                     let k = self.engine.state().step;
-                    while let Some((input, origin)) = self.svc.receive_input()? {
-                        self.take_input(&input, origin, k)?;
-                    }
+                    while self.next_input(k)? {}
                     let before = self.slots.len();
                     for s in &mut self.slots {
                         if s.id == r.controller_id && s.answered == Some(k) {
@@ -1083,7 +1112,8 @@ impl Server {
         // that node's publisher, see `controllers::owns`).
         let claimed = u128::from(r.node_id_lo) | (u128::from(r.node_id_hi) << 64);
         let node = self.svc.request_node(req).unwrap_or(claimed);
-        self.slots.push(Slot::new(id, node, r.pid));
+        let joints = self.engine.model().joints.len();
+        self.slots.push(Slot::new(id, node, r.pid, joints));
         self.c.controllers_joined += 1;
         tracing::info!("controller {id} (pid {}) joined", r.pid);
         self.respond(

@@ -3,8 +3,8 @@
 //! the server's to fix.
 
 use cosim_shared::wire::{
-    send_used, services, ControlRequest, ControlResponse, InputFrame, StateFrame, UsedEntries,
-    Written,
+    send_words, services, ControlRequest, ControlResponse, InputFrame, InputHeader, StateFrame,
+    StateHeader, WireError,
 };
 use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::port::listener::Listener;
@@ -44,17 +44,22 @@ impl fmt::Display for ServiceError {
     }
 }
 
-/// The decimated stream's publisher, its event, and what earlier frames
-/// left in its samples.
-type Decimated = (
-    Publisher<ipc::Service, StateFrame, ()>,
-    Notifier<ipc::Service>,
-    Written,
-);
+/// An input read: the publisher that sent it, and whether its words
+/// matched its header.
+pub type Received = (u128, Result<(), WireError>);
+
+/// A state stream's publisher: a [`StateHeader`] and the frame's words.
+type StatePublisher = Publisher<ipc::Service, [u64], StateHeader>;
+
+/// The decimated stream's publisher and its event.
+type Decimated = (StatePublisher, Notifier<ipc::Service>);
 
 pub type Request = ActiveRequest<ipc::Service, ControlRequest, (), ControlResponse, ()>;
-type InputService =
-    iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, InputFrame, ()>;
+type InputService = iceoryx2::service::port_factory::publish_subscribe::PortFactory<
+    ipc::Service,
+    [u64],
+    InputHeader,
+>;
 type ControlService = iceoryx2::service::port_factory::request_response::PortFactory<
     ipc::Service,
     ControlRequest,
@@ -65,8 +70,8 @@ type ControlService = iceoryx2::service::port_factory::request_response::PortFac
 
 pub struct Services {
     pub node: Node<ipc::Service>,
-    pub state: Publisher<ipc::Service, StateFrame, ()>,
-    pub input: Subscriber<ipc::Service, InputFrame, ()>,
+    pub state: StatePublisher,
+    pub input: Subscriber<ipc::Service, [u64], InputHeader>,
     pub control: Server<ipc::Service, ControlRequest, (), ControlResponse, ()>,
     pub state_ready: Notifier<ipc::Service>,
     pub wake: Listener<ipc::Service>,
@@ -75,8 +80,6 @@ pub struct Services {
     /// The services whose ports tell who sent an input or a request.
     input_service: InputService,
     control_service: ControlService,
-    /// What earlier frames left in the state publisher's samples.
-    written: Written,
 }
 
 fn name(s: &str) -> Result<ServiceName, ServiceError> {
@@ -94,10 +97,15 @@ fn err(what: String) -> impl FnOnce(&dyn fmt::Debug) -> ServiceError {
 }
 
 impl Services {
-    /// Creates every service of server `server`. Stale resources of dead
+    /// Creates every service of server `server`, whose state frames hold
+    /// at most `frame_words` payload words. Stale resources of dead
     /// processes are removed first, so that a server killed without
     /// cleanup does not block its name.
-    pub fn create(server: &str, decimated: bool) -> Result<Services, ServiceError> {
+    pub fn create(
+        server: &str,
+        decimated: bool,
+        frame_words: usize,
+    ) -> Result<Services, ServiceError> {
         let node_name: NodeName = format!("cosim-server-{server}")
             .as_str()
             .try_into()
@@ -155,12 +163,16 @@ impl Services {
 
         // NOTE: overflow stays enabled on the state: a reader that stops
         // reading loses old frames instead of blocking the server.
-        let state_stream = |service: String| -> Result<_, ServiceError> {
+        // The publisher's memory holds every subscriber's whole buffer of
+        // frames of the scene's largest size, allocated once (the static
+        // strategy): the buffer shrinks for big scenes (`state_buffer`).
+        let state_stream = |service: String| -> Result<StatePublisher, ServiceError> {
             node.service_builder(&name(&service)?)
-                .publish_subscribe::<StateFrame>()
+                .publish_subscribe::<[u64]>()
+                .user_header::<StateHeader>()
                 .enable_safe_overflow(true)
                 .history_size(1)
-                .subscriber_max_buffer_size(services::MAX_STATE_BUFFER)
+                .subscriber_max_buffer_size(services::state_buffer(frame_words))
                 .subscriber_max_borrowed_samples(2)
                 .max_subscribers(services::MAX_STATE_SUBSCRIBERS)
                 .max_publishers(1)
@@ -168,13 +180,15 @@ impl Services {
                 .open_or_create()
                 .map_err(|e| err(format!("cannot create {service}"))(&e))?
                 .publisher_builder()
+                .initial_max_slice_len(frame_words.max(1))
                 .create()
                 .map_err(|e| err(format!("cannot publish {service}"))(&e))
         };
         let state = state_stream(services::state(server))?;
         let input_service = node
             .service_builder(&name(&services::input(server))?)
-            .publish_subscribe::<InputFrame>()
+            .publish_subscribe::<[u64]>()
+            .user_header::<InputHeader>()
             .enable_safe_overflow(true)
             .subscriber_max_buffer_size(services::INPUT_BUFFER)
             .max_subscribers(2)
@@ -210,7 +224,7 @@ impl Services {
                 .notifier_builder()
                 .create()
                 .map_err(|e| err("cannot create the decimated stream's notifier".into())(&e))?;
-            Some((publisher, ready, Written::default()))
+            Some((publisher, ready))
         } else {
             None
         };
@@ -224,14 +238,12 @@ impl Services {
             wake,
             input_service,
             control_service,
-            written: Written::default(),
         })
     }
 
     /// Publishes a frame and wakes the blocked readers.
     pub fn publish(&mut self, frame: &StateFrame) -> Result<(), ServiceError> {
-        send_used(&self.state, frame, &mut self.written)
-            .map_err(|e| err("cannot publish the state".into())(&e))?;
+        send(&self.state, frame).map_err(|e| err("cannot publish the state".into())(&e))?;
         // NOTE: after the send: a reader that polled before the frame
         // landed finds the event pending.
         self.state_ready
@@ -243,25 +255,29 @@ impl Services {
     /// Publishes a frame on the decimated stream (when there is one) and
     /// wakes its readers.
     pub fn publish_every(&mut self, frame: &StateFrame) -> Result<(), ServiceError> {
-        let Some((publisher, ready, written)) = self.every.as_mut() else {
+        let Some((publisher, ready)) = self.every.as_mut() else {
             return Ok(());
         };
-        send_used(publisher, frame, written)
-            .map_err(|e| err("cannot publish the decimated state".into())(&e))?;
+        send(publisher, frame).map_err(|e| err("cannot publish the decimated state".into())(&e))?;
         ready
             .notify()
             .map_err(|e| err("cannot notify the decimated stream's readers".into())(&e))?;
         Ok(())
     }
 
-    /// The next input in the buffer, with the id of the publisher that
-    /// sent it (iceoryx2 writes a sample's origin; a client cannot forge it).
-    pub fn receive_input(&self) -> Result<Option<(InputFrame, u128)>, ServiceError> {
+    /// Reads the next input in the buffer into `into`; returns the id of
+    /// the publisher that sent it (iceoryx2 writes a sample's origin; a
+    /// client cannot forge it) and whether its words matched its header's
+    /// counts (when not, `into` has the header's fields and no entries).
+    pub fn receive_input(&self, into: &mut InputFrame) -> Result<Option<Received>, ServiceError> {
         Ok(self
             .input
             .receive()
             .map_err(|e| err("cannot receive inputs".into())(&e))?
-            .map(|s| (s.payload().used_copy(), s.origin().value())))
+            .map(|s| {
+                let read = into.read(s.user_header(), s.payload());
+                (s.origin().value(), read)
+            }))
     }
 
     /// The node of input publisher `publisher`, if it is connected.
@@ -314,4 +330,11 @@ impl Services {
             Err(e) => Err(err("cannot wait for the wake-up event".into())(&e)),
         }
     }
+}
+
+/// The frame's header and words, written straight into the loaned sample.
+fn send(publisher: &StatePublisher, frame: &StateFrame) -> Result<usize, impl fmt::Debug> {
+    send_words(publisher, frame.header(), frame.words(), |w| {
+        frame.encode(w)
+    })
 }
