@@ -167,3 +167,124 @@ fn plotting_a_folder_without_a_run_exits_2() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("states.csv"));
 }
+
+/// The pixels of `png` within `tol` of colour `c` in every channel.
+fn pixels_of(png: &image::RgbImage, c: plotters::style::RGBColor, tol: i32) -> Vec<(u32, u32)> {
+    png.enumerate_pixels()
+        .filter(|(_, _, p)| {
+            (p.0[0] as i32 - c.0 as i32).abs() <= tol
+                && (p.0[1] as i32 - c.1 as i32).abs() <= tol
+                && (p.0[2] as i32 - c.2 as i32).abs() <= tol
+        })
+        .map(|(x, y, _)| (x, y))
+        .collect()
+}
+
+/// The 8-connected groups of `pixels`, largest first.
+fn components(pixels: &[(u32, u32)]) -> Vec<Vec<(u32, u32)>> {
+    let set: std::collections::HashSet<(u32, u32)> = pixels.iter().copied().collect();
+    let mut seen = std::collections::HashSet::new();
+    let mut out = Vec::new();
+    for &p in pixels {
+        if !seen.insert(p) {
+            continue;
+        }
+        let mut group = vec![p];
+        let mut stack = vec![p];
+        while let Some((x, y)) = stack.pop() {
+            for dx in -1i64..=1 {
+                for dy in -1i64..=1 {
+                    let q = ((x as i64 + dx) as u32, (y as i64 + dy) as u32);
+                    if set.contains(&q) && seen.insert(q) {
+                        group.push(q);
+                        stack.push(q);
+                    }
+                }
+            }
+        }
+        out.push(group);
+    }
+    out.sort_by_key(|g| std::cmp::Reverse(g.len()));
+    out
+}
+
+/// Issue 16, point 1: the PNGs drew the data wrongly (plotters issue 549:
+/// lines wider than a pixel leave their panel, steep segments come out
+/// dotted, a spike shows as a piece and a lone dot). A known series is
+/// drawn and the PNG's pixels checked: the line is one connected piece
+/// that reaches the spike's top, stays in its own panel and right of the
+/// tick labels, and spans the time axis.
+#[test]
+fn a_known_series_is_drawn_where_it_must_be_and_nowhere_else() {
+    use cosim_server::plot::figures::{figure, Panel, Series};
+    let tmp = TempDir::new("plots-pixels");
+    // A baseline at 0, a one-sample spike to 10 at t = 1.5, a step to 1
+    // at t = 1.8 (the shape of an impact on a resting contact).
+    // Three samples a pixel, as a 3 s run at h = 1e-3 has.
+    let spike: Vec<(f64, f64)> = (0..=3000)
+        .map(|k| {
+            let t = k as f64 * 1e-3;
+            let y = match k {
+                1500 => 10.0,
+                k if k >= 1800 => 1.0,
+                _ => 0.0,
+            };
+            (t, y)
+        })
+        .collect();
+    let flat: Vec<(f64, f64)> = spike.iter().map(|&(t, _)| (t, -3.0)).collect();
+    let panels = [
+        Panel {
+            ylabel: "spike".into(),
+            series: vec![Series {
+                name: "s".into(),
+                color: color(0),
+                points: spike,
+            }],
+        },
+        Panel {
+            ylabel: "flat".into(),
+            series: vec![Series {
+                name: "f".into(),
+                color: color(1),
+                points: flat,
+            }],
+        },
+    ];
+    let files = figure(tmp.path(), "known", "known series", &panels).expect("drawn");
+    let png = image::open(&files[0]).expect("PNG decodes").to_rgb8();
+    let (w, h) = png.dimensions();
+    let s = pixels_of(&png, color(0), 30);
+    let groups = components(&s);
+    // The series and the legend's sample: nothing else of its colour.
+    assert!(
+        groups.len() <= 2,
+        "{} pieces of the series' colour: {:?}",
+        groups.len(),
+        groups.iter().map(|g| (g.len(), g[0])).collect::<Vec<_>>()
+    );
+    let line = &groups[0];
+    let (xs, ys): (Vec<u32>, Vec<u32>) = line.iter().copied().unzip();
+    let (x_lo, x_hi) = (*xs.iter().min().unwrap(), *xs.iter().max().unwrap());
+    let (y_lo, y_hi) = (*ys.iter().min().unwrap(), *ys.iter().max().unwrap());
+    // Right of the y tick labels (margin 10 + label area 80), inside the
+    // top panel (the figure's lower half is the second panel).
+    assert!(x_lo >= 90 && x_hi < w, "x {x_lo}..{x_hi}");
+    assert!(
+        y_hi < h / 2,
+        "the line reaches y = {y_hi}, into the lower panel"
+    );
+    // Spanning the time axis: from the left of the plot to its right.
+    assert!(x_hi - x_lo > (w - 110) * 8 / 10, "x {x_lo}..{x_hi}");
+    // The spike's full height: the data span 0..10 is 1 / 1.12 of the
+    // plot's height (6 % padding each side), about 250 of the panel's
+    // 340 pixels less its margins and axis area.
+    assert!(y_hi - y_lo > 200, "the line spans y {y_lo}..{y_hi} only");
+    // The flat series: one straight run in the lower panel.
+    let f = components(&pixels_of(&png, color(1), 30));
+    let (_, fy): (Vec<u32>, Vec<u32>) = f[0].iter().copied().unzip();
+    assert!(
+        fy.iter().all(|&y| y > h / 2),
+        "the flat line leaves its panel"
+    );
+}

@@ -74,6 +74,8 @@ fn draw<DB: DrawingBackend>(
 ) -> Result<(), String> {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     root.fill(&WHITE).map_err(e)?;
+    // The whole image, in the backend's pixels: where the lines go.
+    let canvas = root.clone();
     let root = root.titled(title, (FONT, 24)).map_err(e)?;
     let areas = root.split_evenly((panels.len(), 1));
     for (area, panel) in areas.iter().zip(panels) {
@@ -106,13 +108,31 @@ fn draw<DB: DrawingBackend>(
             .map_err(e)?;
         for s in &panel.series {
             let c = s.color;
+            // NOTE: a line wider than a pixel goes wrong in plotters' bitmap
+            // backend (plotters issue 549: a one-sample spike drawn as a
+            // piece and a dot, steep segments dotted, lines out of their
+            // panel; `a_known_series_is_drawn_where_it_must_be_and_nowhere_else`).
+            // A one-pixel path is drawn right, so the 2-pixel line is that
+            // path four times, a pixel apart, in the image's pixels.
+            let mut path: Vec<(i32, i32)> = Vec::new();
+            for p in decimate(&s.points) {
+                let q = chart.backend_coord(&p);
+                if path.last() != Some(&q) {
+                    path.push(q);
+                }
+            }
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let shifted: Vec<(i32, i32)> =
+                    path.iter().map(|&(x, y)| (x + dx, y + dy)).collect();
+                canvas
+                    .draw(&PathElement::new(shifted, c.stroke_width(1)))
+                    .map_err(e)?;
+            }
             chart
-                .draw_series(LineSeries::new(decimate(&s.points), c.stroke_width(2)))
+                .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
                 .map_err(e)?
                 .label(s.name.as_str())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3))
-                });
+                .legend(move |(x, y)| Rectangle::new([(x, y - 1), (x + 20, y + 1)], c.filled()));
         }
         if !panel.series.is_empty() {
             chart
@@ -135,6 +155,7 @@ pub fn figure(
     title: &str,
     panels: &[Panel],
 ) -> Result<Vec<PathBuf>, PlotError> {
+    super::ensure_font()?;
     let height = 200 + 260 * panels.len() as u32;
     let png = dir.join(format!("{stem}.png"));
     let svg = dir.join(format!("{stem}.svg"));
