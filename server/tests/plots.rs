@@ -15,14 +15,16 @@ use std::process::Command;
 
 const BIN: &str = env!("CARGO_BIN_EXE_cosim-server");
 
-const FIGURES: [&str; 9] = [
+const FIGURES: [&str; 11] = [
     "positions",
     "velocities",
     "quaternions",
     "energy",
-    "normal_impulses",
-    "friction_impulses",
-    "joint_impulses",
+    "normal_forces",
+    "friction_forces",
+    "joint_forces",
+    "errors",
+    "timings",
     "solver",
     "lcp_size",
 ];
@@ -146,7 +148,13 @@ fn figures_and_animation_decode_follow_the_trajectory_and_repeat() {
     assert!(status.success());
     let b = tmp.path().join("b");
     run_plot(&b);
-    for (fa, fb) in files(&a).iter().zip(files(&b)) {
+    // The timings figure draws this run's wall times: not repeatable.
+    let repeatable = |f: &PathBuf| !f.to_string_lossy().contains("timings.");
+    for (fa, fb) in files(&a)
+        .iter()
+        .zip(files(&b))
+        .filter(|(fa, _)| repeatable(fa))
+    {
         assert_eq!(
             std::fs::read(fa).unwrap(),
             std::fs::read(&fb).unwrap(),
@@ -216,7 +224,7 @@ fn components(pixels: &[(u32, u32)]) -> Vec<Vec<(u32, u32)>> {
 /// tick labels, and spans the time axis.
 #[test]
 fn a_known_series_is_drawn_where_it_must_be_and_nowhere_else() {
-    use cosim_server::plot::figures::{figure, Panel, Series};
+    use cosim_server::plot::figures::{figure, Frame, Panel, Series};
     let tmp = TempDir::new("plots-pixels");
     // A baseline at 0, a one-sample spike to 10 at t = 1.5, a step to 1
     // at t = 1.8 (the shape of an impact on a resting contact).
@@ -234,24 +242,30 @@ fn a_known_series_is_drawn_where_it_must_be_and_nowhere_else() {
         .collect();
     let flat: Vec<(f64, f64)> = spike.iter().map(|&(t, _)| (t, -3.0)).collect();
     let panels = [
-        Panel {
-            ylabel: "spike".into(),
-            series: vec![Series {
+        Panel::new(
+            "spike",
+            vec![Series {
                 name: "s".into(),
                 color: color(0),
                 points: spike,
+                thin: false,
             }],
-        },
-        Panel {
-            ylabel: "flat".into(),
-            series: vec![Series {
+        ),
+        Panel::new(
+            "flat",
+            vec![Series {
                 name: "f".into(),
                 color: color(1),
                 points: flat,
+                thin: false,
             }],
-        },
+        ),
     ];
-    let files = figure(tmp.path(), "known", "known series", &panels).expect("drawn");
+    let frame = Frame {
+        t: Some((0.0, 3.0)),
+        ..Frame::default()
+    };
+    let files = figure(tmp.path(), "known", "known series", &frame, &panels).expect("drawn");
     let png = image::open(&files[0]).expect("PNG decodes").to_rgb8();
     let (w, h) = png.dimensions();
     let s = pixels_of(&png, color(0), 30);
@@ -287,4 +301,50 @@ fn a_known_series_is_drawn_where_it_must_be_and_nowhere_else() {
         fy.iter().all(|&y| y > h / 2),
         "the flat line leaves its panel"
     );
+}
+
+/// Issue 16, point 3: a group with nothing in it is not drawn (no joints,
+/// no friction), and a failed run's figures are marked at the failed step.
+#[test]
+fn figures_leave_out_empty_groups_and_mark_a_failure() {
+    let tmp = TempDir::new("plots-groups");
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/scenes");
+    let out = tmp.path().join("frictionless");
+    let status = Command::new(BIN)
+        .arg("run")
+        .arg(scenes.join("frictionless.toml"))
+        .args(["--steps", "300", "--plot", "--quiet", "--out"])
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let plots = out.join("plots");
+    assert!(plots.join("normal_forces.png").exists());
+    assert!(!plots.join("friction_forces.png").exists());
+    assert!(!plots.join("joint_forces.png").exists());
+
+    // The reference scene with a force that overflows the first step.
+    let text = std::fs::read_to_string(scenes.join("reference.toml")).unwrap();
+    let text = text.replacen(
+        "velocity = [0.0, -1.5, 0.0]",
+        "velocity = [0.0, -1.5, 0.0]\nforce = [0.0, 0.0, 1e306]",
+        1,
+    );
+    let scene = tmp.path().join("overflow.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = tmp.path().join("overflow");
+    let status = Command::new(BIN)
+        .arg("run")
+        .arg(&scene)
+        .args(["--plot", "--quiet", "--out"])
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert_eq!(status.code(), Some(1), "the run fails");
+    let png = image::open(out.join("plots/positions.png"))
+        .unwrap()
+        .to_rgb8();
+    let red = pixels_of(&png, plotters::style::RGBColor(200, 0, 0), 10);
+    // A marker line down each of the three panels.
+    assert!(red.len() > 3 * 200, "{} marker pixels", red.len());
 }

@@ -25,8 +25,13 @@ pub struct RunData {
     /// Time of each step report.
     pub step_t: Vec<f64>,
     /// Impulse series by `(kind, name)`: one impulse vector per step
-    /// (index `step - 1`), zero where the file has no row.
-    pub impulses: BTreeMap<(String, String), Vec<[f64; 3]>>,
+    /// (index `step - 1`), `None` where the file has no row (the contact
+    /// was not active, or the joint impulse zero).
+    pub impulses: BTreeMap<(String, String), Vec<Option<[f64; 3]>>>,
+    /// The first step report whose status is not `solved`: its time, the
+    /// step that failed (one past the state it left unchanged, which its
+    /// row names) and status.
+    pub first_failure: Option<(f64, u64, String)>,
 }
 
 fn read(dir: &Path, name: &str) -> Result<String, PlotError> {
@@ -96,6 +101,14 @@ impl RunData {
             if cols.len() != header.len() {
                 continue;
             }
+            let status = header.iter().position(|h| h == "status").map(|i| cols[i]);
+            if let (None, Some(status)) = (&data.first_failure, status) {
+                if status != "solved" {
+                    let t = cols[1].parse().unwrap_or(f64::NAN);
+                    let step = cols[0].parse::<u64>().map_or(0, |k| k + 1);
+                    data.first_failure = Some((t, step, status.to_string()));
+                }
+            }
             for (name, v) in header.iter().zip(&cols) {
                 if let Ok(x) = v.parse::<f64>() {
                     data.steps.entry(name.clone()).or_default().push(x);
@@ -129,10 +142,17 @@ impl RunData {
             let series = data
                 .impulses
                 .entry((cols[2].to_string(), cols[3].to_string()))
-                .or_insert_with(|| vec![[0.0; 3]; nsteps]);
-            series[step - 1] = p;
+                .or_insert_with(|| vec![None; nsteps]);
+            series[step - 1] = Some(p);
         }
         Ok(data)
+    }
+
+    /// The step size: the time of the first step report over its step.
+    pub fn h(&self) -> Option<f64> {
+        let step = *self.steps.get("step")?.first()?;
+        let t = *self.step_t.first()?;
+        (step > 0.0 && t > 0.0).then(|| t / step)
     }
 
     /// The `steps.csv` column `name` against time.

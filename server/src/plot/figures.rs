@@ -1,5 +1,8 @@
 //! The figures: one per group of quantities, each as PNG and SVG, time on
-//! x, one colour per body, contact or joint, with a legend.
+//! x, one colour per body, contact or joint, the legend beside the plot.
+//! A figure says what it shows: its title names the scene, the step and
+//! the solver; a group with nothing to show is not drawn; a failed run is
+//! marked where it failed.
 
 use super::data::RunData;
 use super::{color, PlotError, FONT};
@@ -7,22 +10,92 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
-/// One series of a panel.
+/// One series of a panel; a non-finite `y` is a gap (a contact that was
+/// not active at that step).
 pub struct Series {
     pub name: String,
     pub color: RGBColor,
     pub points: Vec<(f64, f64)>,
+    /// Drawn one pixel wide, over the others: a series that follows
+    /// another closely stays visible on it.
+    pub thin: bool,
+}
+
+/// How a panel's y axis maps values.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Scale {
+    Linear,
+    /// Linear within `±c`, logarithmic beyond (matplotlib's symlog), so
+    /// that an impact does not flatten the forces of resting contact.
+    Symlog {
+        c: f64,
+    },
+}
+
+impl Scale {
+    fn to_axis(self, y: f64) -> f64 {
+        match self {
+            Scale::Linear => y,
+            Scale::Symlog { c } if y.abs() <= c => y / c,
+            Scale::Symlog { c } => y.signum() * (1.0 + (y.abs() / c).log10()),
+        }
+    }
+    fn value_at(self, a: f64) -> f64 {
+        match self {
+            Scale::Linear => a,
+            Scale::Symlog { c } if a.abs() <= 1.0 => a * c,
+            Scale::Symlog { c } => a.signum() * c * 10f64.powf(a.abs() - 1.0),
+        }
+    }
 }
 
 /// One panel (a plot with its own y axis) of a figure.
 pub struct Panel {
     pub ylabel: String,
     pub series: Vec<Series>,
+    /// Whole numbers only (counts): fractional ticks are not labelled.
+    pub counts: bool,
+    pub scale: Scale,
 }
 
-/// Most points drawn per series: longer series are decimated to the
-/// minimum and maximum of each bucket, so impacts stay visible as spikes.
+impl Panel {
+    pub fn new(ylabel: impl Into<String>, series: Vec<Series>) -> Panel {
+        Panel {
+            ylabel: ylabel.into(),
+            series,
+            counts: false,
+            scale: Scale::Linear,
+        }
+    }
+    fn counts(mut self) -> Panel {
+        self.counts = true;
+        self
+    }
+    /// Whether any series has a point to draw.
+    fn has_data(&self) -> bool {
+        self.series
+            .iter()
+            .any(|s| s.points.iter().any(|p| p.1.is_finite()))
+    }
+}
+
+/// What frames every panel of a run's figures: the subtitle (scene, step,
+/// solver), the time axis, and the first failed step.
+#[derive(Debug, Clone, Default)]
+pub struct Frame {
+    pub subtitle: String,
+    /// The time axis, exactly (no padding below the start).
+    pub t: Option<(f64, f64)>,
+    /// Time, step and status of the first failed step.
+    pub failure: Option<(f64, u64, String)>,
+}
+
+/// Most points drawn per run of a series: longer runs are decimated to
+/// the minimum and maximum of each bucket, so impacts stay visible.
 const MAX_POINTS: usize = 4000;
+
+/// Width of the legend column right of each plot (pixels).
+const LEGEND_WIDTH: u32 = 190;
 
 fn decimate(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
     if points.len() <= MAX_POINTS {
@@ -49,6 +122,13 @@ fn decimate(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
     out
 }
 
+/// The runs of consecutive finite points: a gap ends a run.
+fn runs(points: &[(f64, f64)]) -> impl Iterator<Item = &[(f64, f64)]> {
+    points
+        .split(|p| !p.1.is_finite() || !p.0.is_finite())
+        .filter(|r| !r.is_empty())
+}
+
 fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in values.filter(|v| v.is_finite()) {
@@ -67,36 +147,97 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
+/// A tick's value as people write it: at most four significant digits,
+/// no trailing zeros, no `-0`, exponents for the very large and small.
+pub fn tick(v: f64) -> String {
+    if v == 0.0 || v.abs() < 1e-12 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if !(1e-3..1e5).contains(&a) {
+        let s = format!("{v:.2e}");
+        // 1.50e3 -> 1.5e3
+        return match s.split_once('e') {
+            Some((m, e)) => {
+                let m = m.trim_end_matches('0').trim_end_matches('.');
+                format!("{m}e{e}")
+            }
+            None => s,
+        };
+    }
+    let decimals = (3 - a.log10().floor() as i32).clamp(0, 6) as usize;
+    let s = format!("{v:.decimals$}");
+    let s = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    };
+    if s == "-0" {
+        "0".into()
+    } else {
+        s
+    }
+}
+
 fn draw<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     title: &str,
+    frame: &Frame,
     panels: &[Panel],
 ) -> Result<(), String> {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     root.fill(&WHITE).map_err(e)?;
-    // The whole image, in the backend's pixels: where the lines go.
+    // The whole image, in the backend's pixels: where lines and legends go.
     let canvas = root.clone();
-    let root = root.titled(title, (FONT, 24)).map_err(e)?;
+    let mut root = root.titled(title, (FONT, 22)).map_err(e)?;
+    if !frame.subtitle.is_empty() {
+        root = root
+            .titled(
+                &frame.subtitle,
+                (FONT, 15).into_font().color(&BLACK.mix(0.7)),
+            )
+            .map_err(e)?;
+    }
     let areas = root.split_evenly((panels.len(), 1));
-    for (area, panel) in areas.iter().zip(panels) {
-        let (x0, x1) = range(
+    for (k, (area, panel)) in areas.iter().zip(panels).enumerate() {
+        let (x0, x1) = frame.t.unwrap_or_else(|| {
+            range(
+                panel
+                    .series
+                    .iter()
+                    .flat_map(|s| s.points.iter().map(|p| p.0)),
+            )
+        });
+        let scale = panel.scale;
+        let (mut y0, mut y1) = range(
             panel
                 .series
                 .iter()
-                .flat_map(|s| s.points.iter().map(|p| p.0)),
+                .flat_map(|s| s.points.iter().map(move |p| scale.to_axis(p.1))),
         );
-        let (y0, y1) = range(
-            panel
-                .series
-                .iter()
-                .flat_map(|s| s.points.iter().map(|p| p.1)),
-        );
+        if panel.counts {
+            // Counts: from zero (a little below, so that a zero line shows)
+            // to at least one.
+            let span = (y1.max(1.0) - y0.min(0.0)).max(1.0);
+            y0 = -0.04 * span;
+            y1 = y1.max(1.0);
+        }
         let mut chart = ChartBuilder::on(area)
             .margin(10)
+            .margin_right(10 + LEGEND_WIDTH)
             .x_label_area_size(40)
             .y_label_area_size(80)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(e)?;
+        let counts = panel.counts;
+        let ylabel = |a: &f64| {
+            let v = scale.value_at(*a);
+            if counts && (v - v.round()).abs() > 1e-9 {
+                String::new()
+            } else {
+                tick(v)
+            }
+        };
         chart
             .configure_mesh()
             .x_desc("t (s)")
@@ -104,44 +245,99 @@ fn draw<DB: DrawingBackend>(
             .label_style((FONT, 14))
             .axis_desc_style((FONT, 16))
             .light_line_style(WHITE.mix(0.0))
+            .x_label_formatter(&|x| tick(*x))
+            .y_label_formatter(&ylabel)
+            .y_labels(8)
             .draw()
             .map_err(e)?;
+        let (px, py) = chart.plotting_area().get_pixel_range();
         for s in &panel.series {
             let c = s.color;
-            // NOTE: a line wider than a pixel goes wrong in plotters' bitmap
-            // backend (plotters issue 549: a one-sample spike drawn as a
-            // piece and a dot, steep segments dotted, lines out of their
-            // panel; `a_known_series_is_drawn_where_it_must_be_and_nowhere_else`).
-            // A one-pixel path is drawn right, so the 2-pixel line is that
-            // path four times, a pixel apart, in the image's pixels.
-            let mut path: Vec<(i32, i32)> = Vec::new();
-            for p in decimate(&s.points) {
-                let q = chart.backend_coord(&p);
-                if path.last() != Some(&q) {
-                    path.push(q);
+            for run in runs(&s.points) {
+                // NOTE: a line wider than a pixel goes wrong in plotters'
+                // bitmap backend (plotters issue 549: a one-sample spike
+                // drawn as a piece and a dot, steep segments dotted, lines
+                // out of their panel;
+                // `a_known_series_is_drawn_where_it_must_be_and_nowhere_else`).
+                // A one-pixel path is drawn right, so the 2-pixel line is
+                // that path four times, a pixel apart, in the image's pixels.
+                let mut path: Vec<(i32, i32)> = Vec::new();
+                for (t, y) in decimate(run) {
+                    let q = chart.backend_coord(&(t, scale.to_axis(y)));
+                    if path.last() != Some(&q) {
+                        path.push(q);
+                    }
+                }
+                // A value of one step alone (a contact active for a
+                // single step: an impact) is a stem from the axis with a
+                // dot, as an impulse is drawn; a 2-pixel dot alone is lost.
+                if let [(x, y)] = path[..] {
+                    path = vec![(x, py.end - 1), (x, y)];
+                    canvas
+                        .draw(&Rectangle::new(
+                            [(x - 2, y - 2), (x + 3, y + 3)],
+                            c.filled(),
+                        ))
+                        .map_err(e)?;
+                }
+                let offsets: &[(i32, i32)] = if s.thin {
+                    &[(0, 0)]
+                } else {
+                    &[(0, 0), (1, 0), (0, 1), (1, 1)]
+                };
+                for &(dx, dy) in offsets {
+                    let shifted: Vec<(i32, i32)> =
+                        path.iter().map(|&(x, y)| (x + dx, y + dy)).collect();
+                    canvas
+                        .draw(&PathElement::new(shifted, c.stroke_width(1)))
+                        .map_err(e)?;
                 }
             }
-            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                let shifted: Vec<(i32, i32)> =
-                    path.iter().map(|&(x, y)| (x + dx, y + dy)).collect();
+        }
+        if let Some((t, step, status)) = &frame.failure {
+            let x = chart.backend_coord(&(*t, y0)).0;
+            let red = RGBColor(200, 0, 0);
+            canvas
+                .draw(&Rectangle::new(
+                    [(x, py.start), (x + 1, py.end)],
+                    red.filled(),
+                ))
+                .map_err(e)?;
+            if k == 0 {
                 canvas
-                    .draw(&PathElement::new(shifted, c.stroke_width(1)))
+                    .draw(&Text::new(
+                        format!("step {step} failed: {status}"),
+                        (x + 4, py.start + 2),
+                        (FONT, 13).into_font().color(&red),
+                    ))
                     .map_err(e)?;
             }
-            chart
-                .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
-                .map_err(e)?
-                .label(s.name.as_str())
-                .legend(move |(x, y)| Rectangle::new([(x, y - 1), (x + 20, y + 1)], c.filled()));
         }
-        if !panel.series.is_empty() {
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK.mix(0.4))
-                .label_font((FONT, 14))
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()
+        // The legend, in its own column right of the plot: never over
+        // the data.
+        let rows = ((py.end - py.start - 8) / 18).max(1) as usize;
+        let x = px.end + 14;
+        for (i, s) in panel.series.iter().enumerate() {
+            let y = py.start + 6 + 18 * i as i32;
+            if i + 1 == rows && panel.series.len() > rows {
+                let more = format!("+{} more", panel.series.len() - i);
+                canvas
+                    .draw(&Text::new(more, (x, y), (FONT, 13).into_font()))
+                    .map_err(e)?;
+                break;
+            }
+            canvas
+                .draw(&Rectangle::new(
+                    [(x, y + 6), (x + 20, y + 8)],
+                    s.color.filled(),
+                ))
+                .map_err(e)?;
+            canvas
+                .draw(&Text::new(
+                    s.name.clone(),
+                    (x + 26, y),
+                    (FONT, 13).into_font(),
+                ))
                 .map_err(e)?;
         }
     }
@@ -153,6 +349,7 @@ pub fn figure(
     dir: &Path,
     stem: &str,
     title: &str,
+    frame: &Frame,
     panels: &[Panel],
 ) -> Result<Vec<PathBuf>, PlotError> {
     super::ensure_font()?;
@@ -166,12 +363,14 @@ pub fn figure(
     draw(
         BitMapBackend::new(&png, (1100, height)).into_drawing_area(),
         title,
+        frame,
         panels,
     )
     .map_err(fail(&png))?;
     draw(
         SVGBackend::new(&svg, (1100, height)).into_drawing_area(),
         title,
+        frame,
         panels,
     )
     .map_err(fail(&svg))?;
@@ -187,6 +386,7 @@ fn body_series(run: &RunData, f: impl Fn(&[f64; 13]) -> f64 + Copy) -> Vec<Serie
             name: b.name.clone(),
             color: color(i),
             points: run.t.iter().copied().zip(b.rows.iter().map(f)).collect(),
+            thin: false,
         })
         .collect()
 }
@@ -195,15 +395,13 @@ fn component_panels(run: &RunData, labels: &[&str], first: usize) -> Vec<Panel> 
     labels
         .iter()
         .enumerate()
-        .map(|(j, label)| Panel {
-            ylabel: label.to_string(),
-            series: body_series(run, move |r| r[first + j]),
-        })
+        .map(|(j, label)| Panel::new(*label, body_series(run, move |r| r[first + j])))
         .collect()
 }
 
-/// Series of impulse magnitudes of one kind, one per contact or joint.
-fn impulse_series(run: &RunData, kind: &str, project: impl Fn(&[f64; 3]) -> f64) -> Vec<Series> {
+/// Force series (N: impulse over the step / h) of one kind, one per
+/// contact or joint, with gaps where it was not active.
+fn force_series(run: &RunData, kind: &str, h: f64) -> Vec<Series> {
     run.impulses
         .iter()
         .filter(|((k, _), _)| k == kind)
@@ -215,30 +413,73 @@ fn impulse_series(run: &RunData, kind: &str, project: impl Fn(&[f64; 3]) -> f64)
                 .step_t
                 .iter()
                 .copied()
-                .zip(v.iter().map(&project))
+                .zip(v.iter().map(|p| p.map_or(f64::NAN, |p| norm(&p) / h)))
                 .collect(),
+            thin: false,
         })
         .collect()
+}
+
+/// A force panel: symlog when the largest force passes 100 times the
+/// typical one (the median of the nonzero values), so that one impact does
+/// not flatten resting contact; its linear range is that typical force,
+/// rounded down to a power of ten.
+fn force_panel(what: &str, series: Vec<Series>) -> Panel {
+    let mut values: Vec<f64> = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.1.abs()))
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .collect();
+    values.sort_by(f64::total_cmp);
+    let (typical, largest) = match (values.get(values.len() / 2), values.last()) {
+        (Some(&m), Some(&l)) => (m, l),
+        _ => return Panel::new(format!("{what} (N)"), series),
+    };
+    if largest <= 100.0 * typical {
+        return Panel::new(format!("{what} (N)"), series);
+    }
+    let c = 10f64.powf(typical.log10().floor());
+    Panel {
+        ylabel: format!("{what} (N, symlog, linear below {})", tick(c)),
+        series,
+        counts: false,
+        scale: Scale::Symlog { c },
+    }
 }
 
 fn norm(p: &[f64; 3]) -> f64 {
     (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()
 }
 
-/// Every figure of a run into `dir`; returns the files written.
-pub fn all(run: &RunData, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
+/// Every figure of a run into `dir`, framed by `frame` (its time axis is
+/// filled in from the run); returns the files written. Figures with no
+/// data (no joints, no friction) are not drawn.
+pub fn all(run: &RunData, dir: &Path, frame: &Frame) -> Result<Vec<PathBuf>, PlotError> {
+    let mut frame = frame.clone();
+    frame.t = match (run.t.first(), run.t.last()) {
+        (Some(&a), Some(&b)) if b > a => Some((a, b)),
+        // A run that failed its first step has one state.
+        (Some(&a), _) => Some((a, a + run.h().unwrap_or(1.0))),
+        _ => None,
+    };
+    frame.failure = frame.failure.or_else(|| run.first_failure.clone());
     let mut files = Vec::new();
-    files.extend(figure(
-        dir,
+    let mut put = |stem: &str, title: &str, panels: Vec<Panel>| -> Result<(), PlotError> {
+        let panels: Vec<Panel> = panels.into_iter().filter(Panel::has_data).collect();
+        if !panels.is_empty() {
+            files.extend(figure(dir, stem, title, &frame, &panels)?);
+        }
+        Ok(())
+    };
+    put(
         "positions",
         "Positions of the centres of mass",
-        &component_panels(run, &["x (m)", "y (m)", "z (m)"], 0),
-    )?);
-    files.extend(figure(
-        dir,
+        component_panels(run, &["x (m)", "y (m)", "z (m)"], 0),
+    )?;
+    put(
         "velocities",
         "Linear and angular velocities (world frame)",
-        &component_panels(
+        component_panels(
             run,
             &[
                 "vx (m/s)",
@@ -250,120 +491,213 @@ pub fn all(run: &RunData, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
             ],
             7,
         ),
-    )?);
-    files.extend(figure(
-        dir,
+    )?;
+    put(
         "quaternions",
         "Orientation quaternions (scalar first)",
-        &component_panels(run, &["qw", "qx", "qy", "qz"], 3),
-    )?);
-    let energy = ["kinetic", "potential", "energy", "energy_midpoint"];
-    files.extend(figure(
-        dir,
+        component_panels(run, &["qw", "qx", "qy", "qz"], 3),
+    )?;
+    // The midpoint total last and thin: it follows the end-of-step total
+    // closely, and both stay visible.
+    let energy = [
+        ("kinetic", "kinetic", 0),
+        ("potential", "potential", 1),
+        ("energy", "total", 2),
+        ("energy_midpoint", "total (midpoint potential)", 3),
+    ];
+    put(
         "energy",
         "Energy: kinetic, potential, total (end of step) and total with midpoint potential",
-        &[Panel {
-            ylabel: "energy (J)".into(),
-            series: energy
+        vec![Panel::new(
+            "energy (J)",
+            energy
                 .iter()
-                .enumerate()
-                .map(|(i, name)| Series {
-                    name: match *name {
-                        "energy" => "total".into(),
-                        "energy_midpoint" => "total (midpoint)".into(),
-                        other => other.into(),
-                    },
-                    color: color(i),
-                    points: run.step_series(name),
+                .map(|&(column, name, c)| Series {
+                    name: name.into(),
+                    color: color(c),
+                    points: run.step_series(column),
+                    thin: column == "energy_midpoint",
                 })
                 .collect(),
-        }],
-    )?);
-    // Normal impulses point along the normal: their magnitude is the impulse.
-    files.extend(figure(
-        dir,
-        "normal_impulses",
-        "Normal impulse per contact",
-        &[Panel {
-            ylabel: "p_n (N s)".into(),
-            series: impulse_series(run, "normal", norm),
-        }],
-    )?);
-    files.extend(figure(
-        dir,
-        "friction_impulses",
-        "Friction impulse magnitude per contact",
-        &[Panel {
-            ylabel: "|p_f| (N s)".into(),
-            series: impulse_series(run, "friction", norm),
-        }],
-    )?);
-    files.extend(figure(
-        dir,
-        "joint_impulses",
-        "Joint impulse magnitude per joint",
-        &[Panel {
-            ylabel: "|p_b| (N s)".into(),
-            series: impulse_series(run, "joint", norm),
-        }],
-    )?);
+        )],
+    )?;
+    // Forces, not impulses: an impulse per step changes with h. The CSV
+    // keeps the impulses.
+    if let Some(h) = run.h() {
+        put(
+            "normal_forces",
+            "Normal force per contact (impulse over the step / h; gaps: not in contact)",
+            vec![force_panel("|f_n|", force_series(run, "normal", h))],
+        )?;
+        put(
+            "friction_forces",
+            "Friction force magnitude per contact (impulse / h)",
+            vec![force_panel("|f_t|", force_series(run, "friction", h))],
+        )?;
+        put(
+            "joint_forces",
+            "Joint force magnitude per joint (impulse / h)",
+            vec![force_panel("|f_b|", force_series(run, "joint", h))],
+        )?;
+    }
+    put(
+        "errors",
+        "Constraint errors: deepest penetration and largest joint error after each step",
+        vec![
+            Panel::new(
+                "penetration (m)",
+                vec![Series {
+                    name: "max penetration".into(),
+                    color: color(3),
+                    points: run.step_series("max_penetration"),
+                    thin: false,
+                }],
+            ),
+            Panel::new(
+                "joint error (m)",
+                vec![Series {
+                    name: "max joint error".into(),
+                    color: color(4),
+                    points: run.step_series("max_joint_error"),
+                    thin: false,
+                }],
+            ),
+        ],
+    )?;
+    let stages = [
+        ("t_collision", "collision"),
+        ("t_assemble", "assemble"),
+        ("t_solve", "solve"),
+        ("t_integrate", "integrate"),
+        ("t_measure", "measure"),
+        ("t_total", "total"),
+    ];
+    put(
+        "timings",
+        "Wall time per step by stage (this machine, this run)",
+        vec![Panel::new(
+            "time (us)",
+            stages
+                .iter()
+                .enumerate()
+                .map(|(i, &(column, name))| Series {
+                    name: name.into(),
+                    color: color(i),
+                    points: run
+                        .step_series(column)
+                        .into_iter()
+                        .map(|(t, s)| (t, s * 1e6))
+                        .collect(),
+                    thin: false,
+                })
+                .collect(),
+        )],
+    )?;
     let log_residual: Vec<(f64, f64)> = run
         .step_series("residual")
         .into_iter()
         .map(|(t, r)| (t, if r > 0.0 { r.log10() } else { -17.0 }))
         .collect();
-    files.extend(figure(
-        dir,
+    put(
         "solver",
         "Solver work per step and residual",
-        &[
-            Panel {
-                ylabel: "pivots".into(),
-                series: vec![Series {
-                    name: "Lemke pivots".into(),
+        vec![
+            Panel::new(
+                "pivots or sweeps",
+                vec![Series {
+                    name: "work".into(),
                     color: color(0),
                     points: run.step_series("pivots"),
+                    thin: false,
                 }],
-            },
-            Panel {
-                ylabel: "log10 residual".into(),
-                series: vec![Series {
-                    name: "relative natural-map residual (0 drawn as 1e-17)".into(),
+            )
+            .counts(),
+            Panel::new(
+                "log10 residual",
+                vec![Series {
+                    name: "natural map (0 as -17)".into(),
                     color: color(1),
                     points: log_residual,
+                    thin: false,
                 }],
-            },
+            ),
         ],
-    )?);
-    files.extend(figure(
-        dir,
+    )?;
+    put(
         "lcp_size",
         "LCP size and contacts",
-        &[
-            Panel {
-                ylabel: "unknowns".into(),
-                series: vec![Series {
+        vec![
+            Panel::new(
+                "unknowns",
+                vec![Series {
                     name: "LCP size".into(),
                     color: color(0),
                     points: run.step_series("lcp_size"),
+                    thin: false,
                 }],
-            },
-            Panel {
-                ylabel: "contacts".into(),
-                series: vec![
+            )
+            .counts(),
+            Panel::new(
+                "contacts",
+                vec![
                     Series {
                         name: "in the LCP".into(),
                         color: color(1),
                         points: run.step_series("contacts_in_lcp"),
+                        thin: false,
                     },
                     Series {
                         name: "active (p_n > 0)".into(),
                         color: color(2),
                         points: run.step_series("active_contacts"),
+                        thin: false,
                     },
                 ],
-            },
+            )
+            .counts(),
         ],
-    )?);
+    )?;
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_read_as_people_write_them() {
+        assert_eq!(tick(10.0), "10");
+        assert_eq!(tick(-0.0), "0");
+        assert_eq!(tick(-1e-15), "0");
+        assert_eq!(tick(0.25), "0.25");
+        assert_eq!(tick(1.5), "1.5");
+        assert_eq!(tick(-2.0), "-2");
+        assert_eq!(tick(12345.0), "12345");
+        assert_eq!(tick(1.5e6), "1.5e6");
+        assert_eq!(tick(2e-5), "2e-5");
+    }
+
+    #[test]
+    fn symlog_is_linear_inside_and_a_decade_a_unit_outside() {
+        let s = Scale::Symlog { c: 2.0 };
+        assert_eq!(s.to_axis(1.0), 0.5);
+        assert_eq!(s.to_axis(-2.0), -1.0);
+        assert!((s.to_axis(200.0) - 3.0).abs() < 1e-12);
+        for y in [-5000.0, -3.0, -0.5, 0.0, 0.7, 2.0, 19.0, 1e6] {
+            assert!((s.value_at(s.to_axis(y)) - y).abs() <= 1e-9 * y.abs().max(1.0));
+        }
+    }
+
+    #[test]
+    fn gaps_split_a_series_into_runs() {
+        let p = [
+            (0.0, 1.0),
+            (1.0, f64::NAN),
+            (2.0, 2.0),
+            (3.0, 3.0),
+            (4.0, f64::NAN),
+        ];
+        let r: Vec<usize> = runs(&p).map(<[_]>::len).collect();
+        assert_eq!(r, [1, 2]);
+    }
 }

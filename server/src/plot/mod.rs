@@ -122,6 +122,18 @@ pub struct PlotOptions {
     pub stills: usize,
 }
 
+/// What a figure says of its run: the scene, the step, the solver.
+pub fn subtitle(scene: &Scene) -> String {
+    let sim = &scene.sim;
+    format!(
+        "scene {}, h = {} s, solver {}, n_d = {}",
+        sim.name.as_deref().unwrap_or("(unnamed)"),
+        figures::tick(sim.dt),
+        sim.solver.as_str(),
+        sim.friction_directions
+    )
+}
+
 /// Draws the figures (into `DIR/plots/`) and the animation
 /// (`DIR/animation.gif`) of the run in `dir`; returns the files written.
 pub fn render(dir: &Path, opts: PlotOptions) -> Result<Vec<PathBuf>, PlotError> {
@@ -132,7 +144,15 @@ pub fn render(dir: &Path, opts: PlotOptions) -> Result<Vec<PathBuf>, PlotError> 
         let plots = dir.join("plots");
         std::fs::create_dir_all(&plots)
             .map_err(|e| PlotError::Draw(format!("{}: {e}", plots.display())))?;
-        files.extend(figures::all(&run, &plots)?);
+        // The figures name their run; a folder without its scene file
+        // (an old recording) is still drawn, without the name.
+        let frame = figures::Frame {
+            subtitle: Scene::load(&dir.join("scene.toml"))
+                .map(|s| subtitle(&s))
+                .unwrap_or_default(),
+            ..figures::Frame::default()
+        };
+        files.extend(figures::all(&run, &plots, &frame)?);
     }
     if opts.animation || opts.stills > 0 {
         let scene =
