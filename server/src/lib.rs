@@ -5,6 +5,7 @@
 pub mod bench;
 pub mod cli;
 pub mod corpus;
+pub mod mcap;
 pub use cosim_engine as engine;
 pub mod output;
 pub mod plot;

@@ -248,6 +248,9 @@ pub struct PlotArgs {
     /// Also write N evenly spread frames of the animation as PNG stills.
     #[arg(long, default_value_t = 0)]
     pub stills: usize,
+    /// Write only DIR/recording.mcap (for Foxglove), no figures.
+    #[arg(long)]
+    pub mcap: bool,
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -288,6 +291,10 @@ pub struct RunArgs {
     /// Write DIR/animation.gif.
     #[arg(long)]
     pub animate: bool,
+    /// Write DIR/recording.mcap: the run for Foxglove (3-D scene, frame
+    /// transforms, numeric channels for its plot panel).
+    #[arg(long)]
+    pub mcap: bool,
 }
 
 /// Exit code for bad input (a scene or an option), as clap uses.

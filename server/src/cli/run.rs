@@ -139,6 +139,11 @@ pub fn run(args: &RunArgs) -> ExitCode {
             return code;
         }
     }
+    if args.mcap {
+        if let Err(code) = record(&out, args.quiet) {
+            return code;
+        }
+    }
     if ok {
         ExitCode::SUCCESS
     } else {
@@ -146,8 +151,39 @@ pub fn run(args: &RunArgs) -> ExitCode {
     }
 }
 
+/// Writes `DIR/recording.mcap` from the run's files.
+fn record(dir: &std::path::Path, quiet: bool) -> Result<(), ExitCode> {
+    let path = dir.join("recording.mcap");
+    match crate::mcap::write(dir, &path) {
+        Ok(w) => {
+            if !quiet {
+                let n: u64 = w.messages.values().sum();
+                println!(
+                    "recording    {} ({n} messages on {} channels; open it in Foxglove)",
+                    path.display(),
+                    w.messages.len()
+                );
+            }
+            Ok(())
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            Err(ExitCode::from(match e {
+                crate::mcap::McapError::Read(_) => EXIT_BAD_INPUT,
+                crate::mcap::McapError::Write(_) => EXIT_FAILED,
+            }))
+        }
+    }
+}
+
 /// `cosim-server plot DIR`.
 pub fn plot(args: &PlotArgs) -> ExitCode {
+    if args.mcap {
+        return match record(&args.dir, false) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(code) => code,
+        };
+    }
     let opts = PlotOptions {
         figures: true,
         animation: true,

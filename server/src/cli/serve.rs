@@ -176,6 +176,7 @@ fn options(args: &ServeArgs) -> Result<(cosim_shared::Scene, ServeOptions), Stri
         shadow: false,
         plot: false,
         animate: false,
+        mcap: false,
     };
     let scene = super::run::load(&run).map_err(|e| e.to_string())?;
     let steps = args.steps.or_else(|| {
