@@ -588,10 +588,9 @@ fn a_recording_matches_the_servers_own_files_and_plots() {
     assert_eq!(ours, theirs, "the recording holds the server's states");
     let figures = cosim_server::plot::render(
         rec.path(),
-        cosim_server::plot::PlotOptions {
+        &cosim_server::plot::PlotOptions {
             figures: true,
-            animation: false,
-            stills: 0,
+            ..Default::default()
         },
     )
     .expect("plot the recording");

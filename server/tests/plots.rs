@@ -15,20 +15,9 @@ use std::process::Command;
 
 const BIN: &str = env!("CARGO_BIN_EXE_cosim-server");
 
-const FIGURES: [&str; 11] = [
-    "positions",
-    "velocities",
-    "quaternions",
-    "energy",
-    "normal_forces",
-    "friction_forces",
-    "joint_forces",
-    "errors",
-    "timings",
-    "solver",
-    "lcp_size",
-];
-
+/// Every figure: the reference scene has joints and friction, so it
+/// draws them all.
+const FIGURES: [&str; 11] = cosim_server::plot::figures::STEMS;
 fn run_plot(out: &Path) {
     let status = Command::new(BIN)
         .args([
@@ -347,4 +336,82 @@ fn figures_leave_out_empty_groups_and_mark_a_failure() {
     let red = pixels_of(&png, plotters::style::RGBColor(200, 0, 0), 10);
     // A marker line down each of the three panels.
     assert!(red.len() > 3 * 200, "{} marker pixels", red.len());
+}
+
+/// Issue 16, point 5: `plot A B` draws two runs in the same figures (the
+/// second thin over the first, both named in the legend and subtitle),
+/// `--only` chooses figures, `--from`/`--to` a time window, `--size` the
+/// image; a figure name that does not exist is named in the error.
+#[test]
+fn two_runs_overlay_in_the_chosen_figures_and_window() {
+    let tmp = TempDir::new("plots-overlay");
+    let (a, b) = (tmp.path().join("lemke"), tmp.path().join("pgs"));
+    for (dir, solver) in [(&a, "lemke"), (&b, "pgs")] {
+        let status = Command::new(BIN)
+            .args([
+                "run", "--steps", "400", "--quiet", "--solver", solver, "--out",
+            ])
+            .arg(dir)
+            .status()
+            .unwrap();
+        assert!(status.success());
+    }
+    let out = tmp.path().join("cmp");
+    let status = Command::new(BIN)
+        .arg("plot")
+        .arg(&a)
+        .arg(&b)
+        .args([
+            "--only",
+            "velocities,energy",
+            "--from",
+            "0.1",
+            "--to",
+            "0.3",
+            "--size",
+            "1300x800",
+            "--out",
+        ])
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "energy.png",
+            "energy.svg",
+            "velocities.png",
+            "velocities.svg"
+        ]
+    );
+    let png = image::open(out.join("velocities.png")).unwrap().to_rgb8();
+    assert_eq!(png.dimensions(), (1300, 800));
+    let svg = std::fs::read_to_string(out.join("energy.svg")).unwrap();
+    for label in ["total (lemke)", "total (pgs)", "solver lemke", "solver pgs"] {
+        assert!(svg.contains(label), "{label} missing");
+    }
+    // The window: the time axis starts at 0.1 and ends at 0.3 (the SVG
+    // has each text on a line of its own).
+    let texts: Vec<&str> = svg.lines().map(str::trim).collect();
+    assert!(texts.contains(&"0.1") && texts.contains(&"0.3"));
+    assert!(!texts.contains(&"0.4") && !texts.contains(&"0.05"));
+
+    let bad = Command::new(BIN)
+        .arg("plot")
+        .arg(&a)
+        .args(["--only", "velocity"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.contains("\"velocity\"") && err.contains("velocities"),
+        "{err}"
+    );
 }

@@ -245,6 +245,26 @@ pub struct LcpArgs {
 pub struct PlotArgs {
     /// Output folder of a run (holding scene.toml and the CSV files).
     pub dir: PathBuf,
+    /// A second run: both drawn in the same figures (DIR's series as usual,
+    /// this one's thin over them), into DIR/compare/ unless --out says.
+    pub other: Option<PathBuf>,
+    /// Only these figures, comma-separated (positions, velocities,
+    /// quaternions, energy, normal_forces, friction_forces, joint_forces,
+    /// errors, timings, solver, lcp_size).
+    #[arg(long)]
+    pub only: Option<String>,
+    /// Draw from this time on (s).
+    #[arg(long)]
+    pub from: Option<f64>,
+    /// Draw up to this time (s).
+    #[arg(long)]
+    pub to: Option<f64>,
+    /// Image size WIDTHxHEIGHT in pixels (default 1100 wide, 260 a panel).
+    #[arg(long)]
+    pub size: Option<String>,
+    /// Where a comparison's figures go (default DIR/compare).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
     /// Also write N evenly spread frames of the animation as PNG stills.
     #[arg(long, default_value_t = 0)]
     pub stills: usize,

@@ -133,9 +133,9 @@ pub fn run(args: &RunArgs) -> ExitCode {
         let opts = PlotOptions {
             figures: args.plot,
             animation: args.animate,
-            stills: 0,
+            ..PlotOptions::default()
         };
-        if let Err(code) = draw(&out, opts, args.quiet) {
+        if let Err(code) = draw(&out, &opts, args.quiet) {
             return code;
         }
     }
@@ -184,18 +184,79 @@ pub fn plot(args: &PlotArgs) -> ExitCode {
             Err(code) => code,
         };
     }
+    let size = match args.size.as_deref().map(parse_size).transpose() {
+        Ok(s) => s,
+        Err(m) => {
+            eprintln!("error: --size {m}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    let figure = plot::figures::Options {
+        only: args
+            .only
+            .as_ref()
+            .map(|o| o.split(',').map(|s| s.trim().to_string()).collect()),
+        size,
+    };
+    if let Some(only) = &figure.only {
+        if let Some(bad) = only
+            .iter()
+            .find(|o| !plot::figures::STEMS.contains(&o.as_str()))
+        {
+            eprintln!(
+                "error: --only {bad:?} is not a figure; the figures are {}",
+                plot::figures::STEMS.join(", ")
+            );
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    }
+    // A window or a choice of figures is about the figures: no animation.
+    let focused = figure.only.is_some() || args.from.is_some() || args.to.is_some();
     let opts = PlotOptions {
         figures: true,
-        animation: true,
+        animation: !focused,
         stills: args.stills,
+        figure,
+        from: args.from,
+        to: args.to,
     };
-    match draw(&args.dir, opts, false) {
+    if let Some(other) = &args.other {
+        let out = args.out.clone().unwrap_or_else(|| args.dir.join("compare"));
+        return match plot::render_overlay(&args.dir, other, &out, &opts) {
+            Ok(files) => {
+                println!("figures      {} files in {}", files.len(), out.display());
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(match e {
+                    plot::PlotError::Read(_) => EXIT_BAD_INPUT,
+                    plot::PlotError::Draw(_) => EXIT_FAILED,
+                })
+            }
+        };
+    }
+    match draw(&args.dir, &opts, false) {
         Ok(()) => ExitCode::SUCCESS,
         Err(code) => code,
     }
 }
 
-fn draw(dir: &std::path::Path, opts: PlotOptions, quiet: bool) -> Result<(), ExitCode> {
+/// `WIDTHxHEIGHT` in pixels, each 200 to 10,000.
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("{s:?}: write WIDTHxHEIGHT in pixels, e.g. 1600x900");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (w, h): (u32, u32) = (
+        w.trim().parse().map_err(|_| bad())?,
+        h.trim().parse().map_err(|_| bad())?,
+    );
+    if !(200..=10_000).contains(&w) || !(200..=10_000).contains(&h) {
+        return Err(format!("{s:?}: each side from 200 to 10000 pixels"));
+    }
+    Ok((w, h))
+}
+
+fn draw(dir: &std::path::Path, opts: &PlotOptions, quiet: bool) -> Result<(), ExitCode> {
     match plot::render(dir, opts) {
         Ok(files) => {
             if !quiet {

@@ -342,10 +342,10 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
     let _ = child.0.wait();
     if let Err(e) = plot::render(
         &out,
-        PlotOptions {
+        &PlotOptions {
             figures: true,
             animation: true,
-            stills: 0,
+            ..PlotOptions::default()
         },
     ) {
         eprintln!("error: {e}");

@@ -28,7 +28,7 @@ pub struct RunData {
     /// (index `step - 1`), `None` where the file has no row (the contact
     /// was not active, or the joint impulse zero).
     pub impulses: BTreeMap<(String, String), Vec<Option<[f64; 3]>>>,
-    /// The first step report whose status is not `solved`: its time, the
+    /// The first step report whose status says it failed: its time, the
     /// step that failed (one past the state it left unchanged, which its
     /// row names) and status.
     pub first_failure: Option<(f64, u64, String)>,
@@ -103,7 +103,9 @@ impl RunData {
             }
             let status = header.iter().position(|h| h == "status").map(|i| cols[i]);
             if let (None, Some(status)) = (&data.first_failure, status) {
-                if status != "solved" {
+                // `not_converged`: the iterative solver's answer, taken
+                // (the state advanced); any other status failed the step.
+                if status != "solved" && status != "not_converged" {
                     let t = cols[1].parse().unwrap_or(f64::NAN);
                     let step = cols[0].parse::<u64>().map_or(0, |k| k + 1);
                     data.first_failure = Some((t, step, status.to_string()));
@@ -146,6 +148,34 @@ impl RunData {
             series[step - 1] = Some(p);
         }
         Ok(data)
+    }
+
+    /// The part of the run from time `from` to `to` (either open): the
+    /// states, step reports and impulses in that window.
+    pub fn window(mut self, from: Option<f64>, to: Option<f64>) -> RunData {
+        let inside = |t: f64| from.is_none_or(|f| t >= f) && to.is_none_or(|e| t <= e);
+        let keep_states: Vec<bool> = self.t.iter().map(|&t| inside(t)).collect();
+        let keep_steps: Vec<bool> = self.step_t.iter().map(|&t| inside(t)).collect();
+        fn pick<T: Clone>(v: &[T], keep: &[bool]) -> Vec<T> {
+            v.iter()
+                .zip(keep)
+                .filter(|(_, &k)| k)
+                .map(|(x, _)| x.clone())
+                .collect()
+        }
+        self.t = pick(&self.t, &keep_states);
+        for b in &mut self.bodies {
+            b.rows = pick(&b.rows, &keep_states);
+        }
+        self.step_t = pick(&self.step_t, &keep_steps);
+        for v in self.steps.values_mut() {
+            *v = pick(v, &keep_steps);
+        }
+        for v in self.impulses.values_mut() {
+            *v = pick(v, &keep_steps);
+        }
+        self.first_failure = self.first_failure.filter(|f| inside(f.0));
+        self
     }
 
     /// The step size: the time of the first step report over its step.

@@ -56,6 +56,9 @@ pub struct Panel {
     /// Whole numbers only (counts): fractional ticks are not labelled.
     pub counts: bool,
     pub scale: Scale,
+    /// A force panel: its scale is chosen from its series when drawn
+    /// (`settle`), also after two runs' series were put together.
+    pub forces: bool,
 }
 
 impl Panel {
@@ -65,6 +68,7 @@ impl Panel {
             series,
             counts: false,
             scale: Scale::Linear,
+            forces: false,
         }
     }
     fn counts(mut self) -> Panel {
@@ -326,9 +330,10 @@ fn draw<DB: DrawingBackend>(
                     .map_err(e)?;
                 break;
             }
+            let bottom = if s.thin { y + 7 } else { y + 8 };
             canvas
                 .draw(&Rectangle::new(
-                    [(x, y + 6), (x + 20, y + 8)],
+                    [(x, y + 6), (x + 20, bottom)],
                     s.color.filled(),
                 ))
                 .map_err(e)?;
@@ -352,8 +357,20 @@ pub fn figure(
     frame: &Frame,
     panels: &[Panel],
 ) -> Result<Vec<PathBuf>, PlotError> {
+    figure_sized(dir, stem, title, frame, panels, None)
+}
+
+/// [`figure`] of `size` pixels (width, height), or the default size.
+fn figure_sized(
+    dir: &Path,
+    stem: &str,
+    title: &str,
+    frame: &Frame,
+    panels: &[Panel],
+    size: Option<(u32, u32)>,
+) -> Result<Vec<PathBuf>, PlotError> {
     super::ensure_font()?;
-    let height = 200 + 260 * panels.len() as u32;
+    let (width, height) = size.unwrap_or((1100, 200 + 260 * panels.len() as u32));
     let png = dir.join(format!("{stem}.png"));
     let svg = dir.join(format!("{stem}.svg"));
     let fail = |p: &Path| {
@@ -361,14 +378,14 @@ pub fn figure(
         move |m: String| PlotError::Draw(format!("{p}: {m}"))
     };
     draw(
-        BitMapBackend::new(&png, (1100, height)).into_drawing_area(),
+        BitMapBackend::new(&png, (width, height)).into_drawing_area(),
         title,
         frame,
         panels,
     )
     .map_err(fail(&png))?;
     draw(
-        SVGBackend::new(&svg, (1100, height)).into_drawing_area(),
+        SVGBackend::new(&svg, (width, height)).into_drawing_area(),
         title,
         frame,
         panels,
@@ -420,30 +437,41 @@ fn force_series(run: &RunData, kind: &str, h: f64) -> Vec<Series> {
         .collect()
 }
 
-/// A force panel: symlog when the largest force passes 100 times the
-/// typical one (the median of the nonzero values), so that one impact does
-/// not flatten resting contact; its linear range is that typical force,
-/// rounded down to a power of ten.
+/// A force panel of quantity `what` (its unit added when settled).
 fn force_panel(what: &str, series: Vec<Series>) -> Panel {
-    let mut values: Vec<f64> = series
-        .iter()
-        .flat_map(|s| s.points.iter().map(|p| p.1.abs()))
-        .filter(|v| v.is_finite() && *v > 0.0)
-        .collect();
-    values.sort_by(f64::total_cmp);
-    let (typical, largest) = match (values.get(values.len() / 2), values.last()) {
-        (Some(&m), Some(&l)) => (m, l),
-        _ => return Panel::new(format!("{what} (N)"), series),
-    };
-    if largest <= 100.0 * typical {
-        return Panel::new(format!("{what} (N)"), series);
-    }
-    let c = 10f64.powf(typical.log10().floor());
     Panel {
-        ylabel: format!("{what} (N, symlog, linear below {})", tick(c)),
-        series,
-        counts: false,
-        scale: Scale::Symlog { c },
+        forces: true,
+        ..Panel::new(what, series)
+    }
+}
+
+impl Panel {
+    /// A force panel's axis from its series: symlog when the largest force
+    /// passes 100 times the typical one (the median of the nonzero
+    /// values), so that one impact does not flatten resting contact; its
+    /// linear range is that typical force, rounded down to a power of ten.
+    fn settle(mut self) -> Panel {
+        if !self.forces {
+            return self;
+        }
+        self.forces = false;
+        let mut values: Vec<f64> = self
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.1.abs()))
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .collect();
+        values.sort_by(f64::total_cmp);
+        let what = std::mem::take(&mut self.ylabel);
+        match (values.get(values.len() / 2), values.last()) {
+            (Some(&typical), Some(&largest)) if largest > 100.0 * typical => {
+                let c = 10f64.powf(typical.log10().floor());
+                self.ylabel = format!("{what} (N, symlog, linear below {})", tick(c));
+                self.scale = Scale::Symlog { c };
+            }
+            _ => self.ylabel = format!("{what} (N)"),
+        }
+        self
     }
 }
 
@@ -451,31 +479,152 @@ fn norm(p: &[f64; 3]) -> f64 {
     (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()
 }
 
-/// Every figure of a run into `dir`, framed by `frame` (its time axis is
-/// filled in from the run); returns the files written. Figures with no
-/// data (no joints, no friction) are not drawn.
-pub fn all(run: &RunData, dir: &Path, frame: &Frame) -> Result<Vec<PathBuf>, PlotError> {
-    let mut frame = frame.clone();
-    frame.t = match (run.t.first(), run.t.last()) {
+/// Every figure's file stem, in drawing order.
+pub const STEMS: [&str; 11] = [
+    "positions",
+    "velocities",
+    "quaternions",
+    "energy",
+    "normal_forces",
+    "friction_forces",
+    "joint_forces",
+    "errors",
+    "timings",
+    "solver",
+    "lcp_size",
+];
+
+/// One figure: its file stem, title and panels.
+pub struct Spec {
+    pub stem: &'static str,
+    pub title: &'static str,
+    pub panels: Vec<Panel>,
+}
+
+/// What to draw and how big.
+#[derive(Debug, Clone, Default)]
+pub struct Options {
+    /// Only these figures (by stem); all when `None`.
+    pub only: Option<Vec<String>>,
+    /// Image size in pixels (width, height); 1100 wide and 260 a panel
+    /// when `None`.
+    pub size: Option<(u32, u32)>,
+}
+
+/// The time axis of a run: from its first state to its last.
+fn time_axis(run: &RunData) -> Option<(f64, f64)> {
+    match (run.t.first(), run.t.last()) {
         (Some(&a), Some(&b)) if b > a => Some((a, b)),
         // A run that failed its first step has one state.
         (Some(&a), _) => Some((a, a + run.h().unwrap_or(1.0))),
         _ => None,
-    };
-    frame.failure = frame.failure.or_else(|| run.first_failure.clone());
+    }
+}
+
+/// Draws `specs` into `dir`: empty panels left out, a figure with none
+/// not drawn; returns the files written.
+fn draw_specs(
+    specs: Vec<Spec>,
+    dir: &Path,
+    frame: &Frame,
+    opts: &Options,
+) -> Result<Vec<PathBuf>, PlotError> {
     let mut files = Vec::new();
-    let mut put = |stem: &str, title: &str, panels: Vec<Panel>| -> Result<(), PlotError> {
-        let panels: Vec<Panel> = panels.into_iter().filter(Panel::has_data).collect();
-        if !panels.is_empty() {
-            files.extend(figure(dir, stem, title, &frame, &panels)?);
+    for spec in specs {
+        if let Some(only) = &opts.only {
+            if !only.iter().any(|o| o == spec.stem) {
+                continue;
+            }
         }
-        Ok(())
+        let panels: Vec<Panel> = spec
+            .panels
+            .into_iter()
+            .filter(Panel::has_data)
+            .map(Panel::settle)
+            .collect();
+        if !panels.is_empty() {
+            files.extend(figure_sized(
+                dir, spec.stem, spec.title, frame, &panels, opts.size,
+            )?);
+        }
+    }
+    Ok(files)
+}
+
+/// Every figure of a run into `dir`, framed by `frame` (its time axis is
+/// filled in from the run); returns the files written. Figures with no
+/// data (no joints, no friction) are not drawn.
+pub fn all(
+    run: &RunData,
+    dir: &Path,
+    frame: &Frame,
+    opts: &Options,
+) -> Result<Vec<PathBuf>, PlotError> {
+    let mut frame = frame.clone();
+    frame.t = time_axis(run);
+    frame.failure = frame.failure.or_else(|| run.first_failure.clone());
+    draw_specs(specs(run), dir, &frame, opts)
+}
+
+/// Two runs in the same figures (`plot A B`): run `a`'s series drawn as
+/// usual and named `NAME (LABEL_A)`, run `b`'s one pixel wide over them,
+/// in the same colours, named `NAME (LABEL_B)`; the time axis covers both.
+pub fn overlay(
+    (a, label_a): (&RunData, &str),
+    (b, label_b): (&RunData, &str),
+    dir: &Path,
+    frame: &Frame,
+    opts: &Options,
+) -> Result<Vec<PathBuf>, PlotError> {
+    let mut frame = frame.clone();
+    frame.t = match (time_axis(a), time_axis(b)) {
+        (Some(x), Some(y)) => Some((x.0.min(y.0), x.1.max(y.1))),
+        (x, y) => x.or(y),
+    };
+    frame.failure = frame
+        .failure
+        .or_else(|| a.first_failure.clone())
+        .or_else(|| b.first_failure.clone());
+    let mut merged = Vec::new();
+    let mut from_b: Vec<Spec> = specs(b);
+    for mut spec in specs(a) {
+        let other = from_b
+            .iter()
+            .position(|s| s.stem == spec.stem)
+            .map(|i| from_b.remove(i));
+        let mut others = other.map(|o| o.panels).unwrap_or_default().into_iter();
+        for panel in &mut spec.panels {
+            for s in &mut panel.series {
+                s.name = format!("{} ({label_a})", s.name);
+            }
+            if let Some(o) = others.next() {
+                panel.series.extend(o.series.into_iter().map(|s| Series {
+                    name: format!("{} ({label_b})", s.name),
+                    thin: true,
+                    ..s
+                }));
+            }
+        }
+        merged.push(spec);
+    }
+    draw_specs(merged, dir, &frame, opts)
+}
+
+/// The figures of a run.
+pub fn specs(run: &RunData) -> Vec<Spec> {
+    let mut specs = Vec::new();
+    let mut put = |stem: &'static str, title: &'static str, panels: Vec<Panel>| {
+        specs.push(Spec {
+            stem,
+            title,
+            panels,
+        });
     };
     put(
         "positions",
         "Positions of the centres of mass",
         component_panels(run, &["x (m)", "y (m)", "z (m)"], 0),
-    )?;
+    );
     put(
         "velocities",
         "Linear and angular velocities (world frame)",
@@ -491,12 +640,12 @@ pub fn all(run: &RunData, dir: &Path, frame: &Frame) -> Result<Vec<PathBuf>, Plo
             ],
             7,
         ),
-    )?;
+    );
     put(
         "quaternions",
         "Orientation quaternions (scalar first)",
         component_panels(run, &["qw", "qx", "qy", "qz"], 3),
-    )?;
+    );
     // The midpoint total last and thin: it follows the end-of-step total
     // closely, and both stay visible.
     let energy = [
@@ -520,7 +669,7 @@ pub fn all(run: &RunData, dir: &Path, frame: &Frame) -> Result<Vec<PathBuf>, Plo
                 })
                 .collect(),
         )],
-    )?;
+    );
     // Forces, not impulses: an impulse per step changes with h. The CSV
     // keeps the impulses.
     if let Some(h) = run.h() {
@@ -528,17 +677,17 @@ pub fn all(run: &RunData, dir: &Path, frame: &Frame) -> Result<Vec<PathBuf>, Plo
             "normal_forces",
             "Normal force per contact (impulse over the step / h; gaps: not in contact)",
             vec![force_panel("|f_n|", force_series(run, "normal", h))],
-        )?;
+        );
         put(
             "friction_forces",
             "Friction force magnitude per contact (impulse / h)",
             vec![force_panel("|f_t|", force_series(run, "friction", h))],
-        )?;
+        );
         put(
             "joint_forces",
             "Joint force magnitude per joint (impulse / h)",
             vec![force_panel("|f_b|", force_series(run, "joint", h))],
-        )?;
+        );
     }
     put(
         "errors",
@@ -563,7 +712,7 @@ pub fn all(run: &RunData, dir: &Path, frame: &Frame) -> Result<Vec<PathBuf>, Plo
                 }],
             ),
         ],
-    )?;
+    );
     let stages = [
         ("t_collision", "collision"),
         ("t_assemble", "assemble"),
@@ -592,7 +741,7 @@ pub fn all(run: &RunData, dir: &Path, frame: &Frame) -> Result<Vec<PathBuf>, Plo
                 })
                 .collect(),
         )],
-    )?;
+    );
     let log_residual: Vec<(f64, f64)> = run
         .step_series("residual")
         .into_iter()
@@ -622,7 +771,7 @@ pub fn all(run: &RunData, dir: &Path, frame: &Frame) -> Result<Vec<PathBuf>, Plo
                 }],
             ),
         ],
-    )?;
+    );
     put(
         "lcp_size",
         "LCP size and contacts",
@@ -656,8 +805,8 @@ pub fn all(run: &RunData, dir: &Path, frame: &Frame) -> Result<Vec<PathBuf>, Plo
             )
             .counts(),
         ],
-    )?;
-    Ok(files)
+    );
+    specs
 }
 
 #[cfg(test)]

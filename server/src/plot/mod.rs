@@ -114,12 +114,58 @@ impl std::fmt::Display for PlotError {
 impl std::error::Error for PlotError {}
 
 /// What to draw.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct PlotOptions {
     pub figures: bool,
     pub animation: bool,
     /// PNG stills of the animation (0: none).
     pub stills: usize,
+    /// Which figures, and their size.
+    pub figure: figures::Options,
+    /// The time window drawn (either end open).
+    pub from: Option<f64>,
+    pub to: Option<f64>,
+}
+
+/// The frame of a run folder's figures: its scene named when its
+/// `scene.toml` reads (an old recording without one is still drawn).
+fn frame_of(dir: &Path) -> figures::Frame {
+    figures::Frame {
+        subtitle: Scene::load(&dir.join("scene.toml"))
+            .map(|s| subtitle(&s))
+            .unwrap_or_default(),
+        ..figures::Frame::default()
+    }
+}
+
+/// `plot A B`: the figures of two runs together (settings, solvers, time
+/// steps), into `out`; returns the files written.
+pub fn render_overlay(
+    a: &Path,
+    b: &Path,
+    out: &Path,
+    opts: &PlotOptions,
+) -> Result<Vec<PathBuf>, PlotError> {
+    ensure_font()?;
+    let load = |d: &Path| Ok::<_, PlotError>(data::RunData::load(d)?.window(opts.from, opts.to));
+    let (ra, rb) = (load(a)?, load(b)?);
+    let label = |d: &Path| {
+        d.file_name().map_or_else(
+            || d.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        )
+    };
+    let (la, mut lb) = (label(a), label(b));
+    if lb == la {
+        lb = format!("{lb}, 2nd");
+    }
+    std::fs::create_dir_all(out).map_err(|e| PlotError::Draw(format!("{}: {e}", out.display())))?;
+    let mut frame = frame_of(a);
+    let other = frame_of(b).subtitle;
+    if other != frame.subtitle {
+        frame.subtitle = format!("{la}: {}; {lb}: {other}", frame.subtitle);
+    }
+    figures::overlay((&ra, &la), (&rb, &lb), out, &frame, &opts.figure)
 }
 
 /// What a figure says of its run: the scene, the step, the solver.
@@ -136,24 +182,18 @@ pub fn subtitle(scene: &Scene) -> String {
 
 /// Draws the figures (into `DIR/plots/`) and the animation
 /// (`DIR/animation.gif`) of the run in `dir`; returns the files written.
-pub fn render(dir: &Path, opts: PlotOptions) -> Result<Vec<PathBuf>, PlotError> {
+pub fn render(dir: &Path, opts: &PlotOptions) -> Result<Vec<PathBuf>, PlotError> {
     ensure_font()?;
-    let run = data::RunData::load(dir)?;
+    let full = data::RunData::load(dir)?;
     let mut files = Vec::new();
     if opts.figures {
         let plots = dir.join("plots");
         std::fs::create_dir_all(&plots)
             .map_err(|e| PlotError::Draw(format!("{}: {e}", plots.display())))?;
-        // The figures name their run; a folder without its scene file
-        // (an old recording) is still drawn, without the name.
-        let frame = figures::Frame {
-            subtitle: Scene::load(&dir.join("scene.toml"))
-                .map(|s| subtitle(&s))
-                .unwrap_or_default(),
-            ..figures::Frame::default()
-        };
-        files.extend(figures::all(&run, &plots, &frame)?);
+        let run = full.clone().window(opts.from, opts.to);
+        files.extend(figures::all(&run, &plots, &frame_of(dir), &opts.figure)?);
     }
+    let run = full;
     if opts.animation || opts.stills > 0 {
         let scene =
             Scene::load(&dir.join("scene.toml")).map_err(|e| PlotError::Read(e.to_string()))?;
