@@ -1,0 +1,384 @@
+"""Connection, Controller and Monitor: the Rust client's three roles in
+Python (docs/protocol.md, "Lockstep")."""
+
+import atexit
+import ctypes
+import os
+import time
+import weakref
+from typing import Iterator, Mapping, Optional, Sequence, Tuple
+
+import iceoryx2 as iox2
+import numpy as np
+
+from .wire import (
+    CMD_INFO,
+    CMD_JOIN,
+    CMD_LEAVE,
+    CMD_PAUSE,
+    CMD_RESUME,
+    CMD_SHUTDOWN,
+    CMD_STEP,
+    IMPULSE_WORDS,
+    PROTOCOL_VERSION,
+    ROLE_CONTROLLER,
+    SLOT_ANSWERED,
+    STATUS_SERVER_SPINS,
+    STATUS_SHUTDOWN,
+    STATUS_SOLVER_FAILED,
+    STATUS_WAITING,
+    TORQUE_WORDS,
+    BadFrameError,
+    BodyImpulse,
+    ControlRequest,
+    ControlResponse,
+    InputHeader,
+    JointTorque,
+    State,
+    StateHeader,
+)
+
+
+class CosimError(Exception):
+    """Every error of this package."""
+
+
+class NoServer(CosimError):
+    """No server of this name runs on this machine."""
+
+
+class Refused(CosimError):
+    """The server answered with an error status."""
+
+    def __init__(self, status: int, message: str):
+        super().__init__(f"the server refused (status {status}): {message}")
+        self.status = status
+        self.message = message
+
+
+class Timeout(CosimError, TimeoutError):
+    """No answer or frame within the timeout."""
+
+
+class Shutdown(CosimError):
+    """The server announced its shutdown (its last frame)."""
+
+
+class BadFrame(CosimError):
+    """A state frame whose words do not match its header."""
+
+
+_LOGS_QUIET = False
+
+
+def _quiet():
+    global _LOGS_QUIET
+    if not _LOGS_QUIET:
+        iox2.set_log_level(iox2.LogLevel.Error)
+        _LOGS_QUIET = True
+
+
+def _service(name: str, what: str) -> "iox2.ServiceName":
+    return iox2.ServiceName.new(f"cosim/{name}/{what}")
+
+
+def _open(name: str, what: str, open_fn):
+    try:
+        return open_fn()
+    except Exception as e:  # iceoryx2 raises its own error types
+        if "DoesNotExist" in repr(e) or "DoesNotExist" in str(e):
+            raise NoServer(
+                f"no cosim server named '{name}' is running "
+                f"(start one with `cosim-server serve --name {name}`)"
+            ) from None
+        raise CosimError(f"cannot open cosim/{name}/{what}: {e}") from e
+
+
+class Connection:
+    """The control service of server `name`: info, pause, resume, step,
+    shutdown. Controllers and monitors have one (`.connection`)."""
+
+    def __init__(self, name: str = "default"):
+        _quiet()
+        self.name = name
+        self.node = iox2.NodeBuilder.new().create(iox2.ServiceType.Ipc)
+        control = _open(
+            name,
+            "control",
+            lambda: self.node.service_builder(_service(name, "control"))
+            .request_response(ControlRequest, ControlResponse)
+            .open(),
+        )
+        self._client = control.client_builder().create()
+        self._wake = _open(
+            name,
+            "wake",
+            lambda: self.node.service_builder(_service(name, "wake")).event().open(),
+        ).notifier_builder().create()
+
+    def notify(self):
+        self._wake.notify()
+
+    def request(self, command: int, timeout: float = 5.0, **fields) -> ControlResponse:
+        """Sends a control request and waits for its answer."""
+        node_id = self.node.id.value
+        req = ControlRequest(
+            version=PROTOCOL_VERSION,
+            command=command,
+            node_id_lo=node_id & (2**64 - 1),
+            node_id_hi=node_id >> 64,
+            pid=os.getpid(),
+            **fields,
+        )
+        pending = self._client.send_copy(req)
+        self._wake.notify()
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            response = pending.receive()
+            if response is not None:
+                r = response.payload().contents
+                if r.status != 0:
+                    raise Refused(r.status, r.text())
+                return ControlResponse.from_buffer_copy(r)
+            self.node.wait(iox2.Duration.from_micros(100))
+        raise Timeout(f"no answer from the server '{self.name}' within {timeout} s")
+
+    def info(self) -> ControlResponse:
+        return self.request(CMD_INFO)
+
+    def pause(self) -> ControlResponse:
+        return self.request(CMD_PAUSE)
+
+    def resume(self) -> ControlResponse:
+        return self.request(CMD_RESUME)
+
+    def step(self, n: int) -> ControlResponse:
+        return self.request(CMD_STEP, count=n)
+
+    def shutdown(self) -> ControlResponse:
+        return self.request(CMD_SHUTDOWN)
+
+
+class _StateReader:
+    def __init__(self, conn: Connection, what: str = "state", buffer: int = 2):
+        name = conn.name
+        service = _open(
+            name,
+            what,
+            lambda: conn.node.service_builder(_service(name, what))
+            .publish_subscribe(iox2.Slice[ctypes.c_uint64])
+            .user_header(StateHeader)
+            .open(),
+        )
+        self._sub = service.subscriber_builder().buffer_size(buffer).create()
+        ready = "state-ready" if what == "state" else f"{what}-ready"
+        self._ready = _open(
+            name,
+            ready,
+            lambda: conn.node.service_builder(_service(name, ready)).event().open(),
+        ).listener_builder().create()
+
+    def receive(self, newest: bool) -> Optional[State]:
+        """The next frame in the buffer, or with `newest` the newest one
+        (older ones dropped unread)."""
+        got = None
+        while True:
+            sample = self._sub.receive()
+            if sample is None:
+                break
+            got = sample
+            if not newest:
+                break
+        if got is None:
+            return None
+        # The words in the payload: iceoryx2's sample header counts them
+        # (the binding's Slice.len() of 0.10 counts bytes instead).
+        try:
+            return State(
+                got.user_header().contents,
+                got.header.number_of_elements,
+                got.payload_ptr,
+            )
+        except BadFrameError as e:
+            raise BadFrame(str(e)) from None
+
+    def wait(self, seconds: float):
+        # A frame published before the event leaves the event pending.
+        self._ready.timed_wait(iox2.Duration.from_secs_f64(max(seconds, 0.0)))
+
+
+class Controller:
+    """A controller in the lockstep of server `name`: `next_state()`, then
+    `send(...)`, each step. Leaves on `leave()`, at the end of a `with`
+    block, or at interpreter exit."""
+
+    def __init__(self, name: str = "default", timeout: float = 10.0):
+        self.connection = Connection(name)
+        self.name = name
+        self.timeout = timeout
+        # Subscribe and publish before joining (protocol.md, Lockstep 1).
+        self._reader = _StateReader(self.connection)
+        joints = self.connection.info().joint_count
+        node = self.connection.node
+        self._input = _open(
+            name,
+            "input",
+            lambda: node.service_builder(_service(name, "input"))
+            .publish_subscribe(iox2.Slice[ctypes.c_uint64])
+            .user_header(InputHeader)
+            .open(),
+        ).publisher_builder().initial_max_slice_len(
+            max(1, TORQUE_WORDS * joints + IMPULSE_WORDS * 8)
+        ).allocation_strategy(iox2.AllocationStrategy.PowerOfTwo).create()
+        self.info = self.connection.request(CMD_JOIN, role=ROLE_CONTROLLER)
+        self.id = self.info.controller_id
+        self.joined = True
+        self._answered: Optional[Tuple[int, int]] = None
+        self._sequence = 0
+        self.last: Optional[State] = None
+        me = weakref.ref(self)
+        atexit.register(lambda: me() is not None and me().leave())
+
+    def __enter__(self) -> "Controller":
+        return self
+
+    def __exit__(self, *exc):
+        self.leave()
+        return False
+
+    def leave(self):
+        """Leaves the lockstep once; a server that is gone is not an error."""
+        if not self.joined:
+            return
+        self.joined = False
+        try:
+            self.connection.request(CMD_LEAVE, controller_id=self.id, timeout=0.5)
+        except CosimError:
+            pass
+
+    def next_state(self, timeout: Optional[float] = None) -> State:
+        """The newest frame to answer: of a step not yet answered, or of a
+        failed step that asks for a new answer. Raises `Shutdown` at the
+        server's last frame (kept in `.last`)."""
+        timeout = self.timeout if timeout is None else timeout
+        step, sequence = self._answered if self._answered else (None, 0)
+        deadline = time.monotonic() + timeout
+        while True:
+            newest = self._reader.receive(newest=True)
+            if newest is not None:
+                if newest.status & STATUS_SHUTDOWN:
+                    self.last = newest
+                    raise Shutdown(f"the server '{self.name}' shut down")
+                # A frame that does not list this controller predates the
+                # join (protocol.md, Lockstep 2).
+                mine = newest.slot(self.id)
+                again = (
+                    mine is not None
+                    and newest.status & STATUS_SOLVER_FAILED
+                    and not mine.flags & SLOT_ANSWERED
+                    and newest.sequence > sequence
+                )
+                if (
+                    not newest.status & STATUS_WAITING
+                    and mine is not None
+                    and (newest.step != step or again)
+                ):
+                    self.last = newest
+                    return newest
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise Timeout(f"no state frame from '{self.name}' within {timeout} s")
+            self._reader.wait(min(left, 0.1))
+
+    def states(self) -> Iterator[State]:
+        """Every state to answer, until the server shuts down."""
+        while True:
+            try:
+                yield self.next_state()
+            except Shutdown:
+                return
+
+    def send(
+        self,
+        torques: Mapping[int, Sequence[float]] = {},
+        impulses: Mapping[int, Tuple[Sequence[float], Sequence[float]]] = {},
+    ):
+        """Answers the last state: joint torques (N m, world frame, held
+        until changed) by joint index, and one-step body impulses (linear
+        N s, angular N m s) by body index."""
+        state = self.last
+        step = state.step if state is not None else 0
+        self._sequence += 1
+        header = InputHeader(
+            version=PROTOCOL_VERSION,
+            controller_id=self.id,
+            step=step,
+            sequence=self._sequence,
+            torque_count=len(torques),
+            impulse_count=len(impulses),
+        )
+        entries = [
+            JointTorque(joint=j, torque=(ctypes.c_double * 3)(*np.asarray(t, float)))
+            for j, t in torques.items()
+        ] + [
+            BodyImpulse(
+                body=b,
+                linear=(ctypes.c_double * 3)(*np.asarray(lin, float)),
+                angular=(ctypes.c_double * 3)(*np.asarray(ang, float)),
+            )
+            for b, (lin, ang) in impulses.items()
+        ]
+        words = TORQUE_WORDS * len(torques) + IMPULSE_WORDS * len(impulses)
+        sample = self._input.loan_slice_uninit(words)
+        ctypes.memmove(sample.user_header_ptr, ctypes.byref(header), ctypes.sizeof(header))
+        at = sample.payload_ptr
+        for entry in entries:
+            ctypes.memmove(at, ctypes.byref(entry), ctypes.sizeof(entry))
+            at += ctypes.sizeof(entry)
+        sample.assume_init().send()
+        if state is None or not state.status & STATUS_SERVER_SPINS:
+            self.connection.notify()
+        if state is not None:
+            self._answered = (state.step, state.sequence)
+
+
+class Monitor:
+    """Reads the state without joining: it never slows the server. With
+    `every=True`, the decimated stream of a server started with
+    `--publish-every N`."""
+
+    def __init__(self, name: str = "default", buffer: int = 1, every: bool = False):
+        self.connection = Connection(name)
+        self.name = name
+        self._reader = _StateReader(
+            self.connection, "state-every" if every else "state", buffer
+        )
+
+    def latest(self) -> Optional[State]:
+        """The newest frame, without waiting (None when there is none)."""
+        return self._reader.receive(newest=True)
+
+    def next(self, timeout: float = 10.0) -> State:
+        """The next frame in order."""
+        deadline = time.monotonic() + timeout
+        while True:
+            state = self._reader.receive(newest=False)
+            if state is not None:
+                return state
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise Timeout(f"no state frame from '{self.name}' within {timeout} s")
+            self._reader.wait(min(left, 0.1))
+
+
+__all__ = [
+    "BadFrame",
+    "Connection",
+    "Controller",
+    "CosimError",
+    "Monitor",
+    "NoServer",
+    "Refused",
+    "Shutdown",
+    "Timeout",
+]
