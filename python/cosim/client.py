@@ -212,10 +212,16 @@ class Controller:
     `send(...)`, each step. Leaves on `leave()`, at the end of a `with`
     block, or at interpreter exit."""
 
-    def __init__(self, name: str = "default", timeout: float = 10.0):
+    def __init__(self, name: str = "default", timeout: float = 10.0, wait: str = "block"):
+        """`wait`: "block" sleeps on the server's event between polls;
+        "spin" busy-polls (the fastest wake-up when the controller has a
+        core of its own, the slowest when it shares one)."""
+        if wait not in ("block", "spin"):
+            raise ValueError(f'wait = {wait!r}: "block" or "spin"')
         self.connection = Connection(name)
         self.name = name
         self.timeout = timeout
+        self.spin = wait == "spin"
         # Subscribe and publish before joining (protocol.md, Lockstep 1).
         self._reader = _StateReader(self.connection)
         joints = self.connection.info().joint_count
@@ -288,7 +294,8 @@ class Controller:
             left = deadline - time.monotonic()
             if left <= 0:
                 raise Timeout(f"no state frame from '{self.name}' within {timeout} s")
-            self._reader.wait(min(left, 0.1))
+            if not self.spin:
+                self._reader.wait(min(left, 0.1))
 
     def states(self) -> Iterator[State]:
         """Every state to answer, until the server shuts down."""

@@ -82,6 +82,41 @@ fn peer_on(cores: &str, args: &[&str]) -> std::io::Result<Peer> {
         .map(Peer)
 }
 
+/// Who answers the lockstep: this program's Rust controller, or the
+/// Python package's (`python3 -m cosim.peer`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Client {
+    Rust,
+    Python,
+}
+
+/// A Python controller of the `cosim` package on `cores`, as `peer_on`
+/// places this program's peers.
+fn python_peer_on(cores: &str, name: &str, mode: WaitMode) -> std::io::Result<Peer> {
+    let mut cmd = if PINNED.load(std::sync::atomic::Ordering::Relaxed) {
+        let mut c = Command::new("taskset");
+        c.args(["-c", cores, "python3"]);
+        c
+    } else {
+        Command::new("python3")
+    };
+    cmd.args(["-m", "cosim.peer", name, mode.as_str()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .map(Peer)
+}
+
+/// Whether `python3` imports the `cosim` package (`pip install ./python`).
+fn python_package() -> bool {
+    Command::new("python3")
+        .args(["-c", "import cosim"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
 type BoxError = Box<dyn std::error::Error>;
 
 fn svc(name: &str) -> Result<ServiceName, BoxError> {
@@ -271,7 +306,20 @@ fn lockstep(
     steps: u64,
     sidecar: Option<&str>,
 ) -> Result<Lockstep, BoxError> {
-    let name = run_name(controllers, mode, sidecar);
+    lockstep_of(Client::Rust, controllers, mode, steps, sidecar)
+}
+
+fn lockstep_of(
+    client: Client,
+    controllers: usize,
+    mode: WaitMode,
+    steps: u64,
+    sidecar: Option<&str>,
+) -> Result<Lockstep, BoxError> {
+    let mut name = run_name(controllers, mode, sidecar);
+    if client == Client::Python {
+        name.push_str("-py");
+    }
     // A run of a million steps is Lemke's alone: the solve ladder takes
     // the reference scene through 10^6 steps (every_step_succeeds.rs).
     let scene = crate::scenes::reference()?;
@@ -301,10 +349,13 @@ fn lockstep(
         } else {
             all_cores()
         };
-        peers.push(peer_on(
-            &cores,
-            &["controller", "--name", &name, "--wait", mode.as_str()],
-        )?);
+        peers.push(match client {
+            Client::Rust => peer_on(
+                &cores,
+                &["controller", "--name", &name, "--wait", mode.as_str()],
+            )?,
+            Client::Python => python_peer_on(&cores, &name, mode)?,
+        });
     }
     if let Some(role) = sidecar {
         peers.push(peer_on(
@@ -606,6 +657,27 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
             ));
             rows.push((n, mode, r));
         }
+    }
+    // The Python package's controller (issue 16, point 9), where python3
+    // has it: the same loop, answered from Python.
+    if python_package() {
+        for mode in [WaitMode::Spin, WaitMode::Block] {
+            if quick && mode == WaitMode::Block {
+                continue;
+            }
+            let r = lockstep_of(Client::Python, 1, mode, steps, None)?;
+            out.push_str(&format!(
+                "| lockstep, 1 Python controller (cosim package), {} | {:.0} | {:.2} | {:.2} / {:.2} | {:.2} |\n",
+                mode.as_str(),
+                r.steps_per_s,
+                r.round_trip_us,
+                r.compute_us,
+                r.compute_mean_us,
+                r.overhead_us
+            ));
+        }
+    } else {
+        out.push_str("| lockstep, 1 Python controller | skipped: python3 does not import the cosim package (pip install ./python) | - | - | - |\n");
     }
     let spin1 = rows
         .iter()
