@@ -265,6 +265,10 @@ pub struct PlotArgs {
     /// Where a comparison's figures go (default DIR/compare).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Animation frames per simulated second (default 25; fewer make a
+    /// smaller GIF, faster).
+    #[arg(long)]
+    pub fps: Option<f64>,
     /// Also write N evenly spread frames of the animation as PNG stills.
     #[arg(long, default_value_t = 0)]
     pub stills: usize,
@@ -311,6 +315,9 @@ pub struct RunArgs {
     /// Write DIR/animation.gif.
     #[arg(long)]
     pub animate: bool,
+    /// Animation frames per simulated second (default 25).
+    #[arg(long)]
+    pub fps: Option<f64>,
     /// Write DIR/recording.mcap: the run for Foxglove (3-D scene, frame
     /// transforms, numeric channels for its plot panel).
     #[arg(long)]

@@ -133,6 +133,7 @@ pub fn run(args: &RunArgs) -> ExitCode {
         let opts = PlotOptions {
             figures: args.plot,
             animation: args.animate,
+            fps: args.fps,
             ..PlotOptions::default()
         };
         if let Err(code) = draw(&out, &opts, args.quiet) {
@@ -219,6 +220,7 @@ pub fn plot(args: &PlotArgs) -> ExitCode {
         figure,
         from: args.from,
         to: args.to,
+        fps: args.fps,
     };
     if let Some(other) = &args.other {
         let out = args.out.clone().unwrap_or_else(|| args.dir.join("compare"));

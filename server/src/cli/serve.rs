@@ -177,6 +177,7 @@ fn options(args: &ServeArgs) -> Result<(cosim_shared::Scene, ServeOptions), Stri
         plot: false,
         animate: false,
         mcap: false,
+        fps: None,
     };
     let scene = super::run::load(&run).map_err(|e| e.to_string())?;
     let steps = args.steps.or_else(|| {

@@ -1,8 +1,12 @@
 //! The animation: an orthographic view of the scene as a GIF that plays at
 //! real time (frames skipped as needed), the simulated time in a corner.
 //! Planes are shaded patches, spheres shaded discs with a body-fixed dot (so
-//! rolling and spinning show), joints dark links from each body's centre to
-//! the anchor.
+//! rolling and spinning show: solid on the near half, a ring on the far
+//! half), each with a shadow and a drop line to the floor (so height reads)
+//! and its name; joints dark links from each body's centre to the anchor;
+//! contact forces red arrows pushing at the contact point (length by
+//! decades of newtons); a failed run's frames after the failure carry a
+//! banner.
 
 use super::data::RunData;
 use super::{color, PlotError, FONT};
@@ -133,10 +137,16 @@ impl Camera {
     }
 }
 
-/// Which recorded state each frame shows, and the delay per frame (ms).
+/// Which recorded state each frame shows, and the delay per frame (ms),
+/// at [`FPS`].
 pub fn frames(run: &RunData) -> (Vec<usize>, u32) {
+    frames_at(run, FPS)
+}
+
+/// [`frames`] at `fps` frames per simulated second.
+pub fn frames_at(run: &RunData, fps: f64) -> (Vec<usize>, u32) {
     let t_end = run.t.last().copied().unwrap_or(0.0);
-    let mut interval = 1.0 / FPS;
+    let mut interval = 1.0 / fps.clamp(0.1, 100.0);
     while t_end / interval > MAX_FRAMES as f64 {
         interval *= 2.0;
     }
@@ -162,6 +172,27 @@ pub fn marker(radius: f64, r: &[f64; 13]) -> Vector3<f64> {
     let q = UnitQuaternion::from_quaternion(Quaternion::new(r[3], r[4], r[5], r[6]));
     Vector3::new(r[0], r[1], r[2]) + q.transform_vector(&Vector3::x()) * (0.8 * radius)
 }
+
+/// A path `width` pixels wide as one-pixel paths side by side: plotters
+/// draws wider strokes wrongly in bitmaps (plotters issue 549).
+fn thick<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    path: &[(i32, i32)],
+    color: RGBColor,
+    width: i32,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    for dx in 0..width {
+        for dy in 0..width {
+            let p: Vec<(i32, i32)> = path.iter().map(|&(x, y)| (x + dx, y + dy)).collect();
+            area.draw(&PathElement::new(p, color.stroke_width(1)))?;
+        }
+    }
+    Ok(())
+}
+
+/// Length of a force arrow per decade of newtons (pixels), beyond a first
+/// decade's: 5 N draws 25 pixels, 10^5 N 84, whatever the zoom.
+const ARROW_PER_DECADE: f64 = 14.0;
 
 fn shade(c: RGBColor, f: f64) -> RGBColor {
     let m = |x: u8| ((x as f64) * f).round().clamp(0.0, 255.0) as u8;
@@ -250,32 +281,43 @@ fn draw_frame<DB: DrawingBackend>(
         .map_err(e)?;
     }
 
-    // Joints: links from each body's centre to the anchor, under the spheres.
-    for j in &model.joints {
-        let anchor = match j.a {
-            Attachment::World => j.local_a,
-            Attachment::Body(a) => {
-                let r = &run.bodies[a].rows[i];
-                let q = UnitQuaternion::from_quaternion(Quaternion::new(r[3], r[4], r[5], r[6]));
-                centre(a) + q.transform_vector(&j.local_a)
+    // Shadows and drop lines on the floor: the plane that faces up the
+    // most (against gravity), straight below each centre.
+    let g = model.params.gravity;
+    let up = if g.norm() > 0.0 {
+        -g.normalize()
+    } else {
+        Vector3::z()
+    };
+    let floor = model
+        .planes
+        .iter()
+        .filter(|p| p.normal.dot(&up) > 0.5)
+        .max_by(|a, b| a.normal.dot(&up).total_cmp(&b.normal.dot(&up)));
+    if let Some(f) = floor {
+        for b in 0..model.bodies.len() {
+            let Shape::Sphere { radius } = model.bodies[b].shape;
+            let c = centre(b);
+            let height = f.normal.dot(&c) - f.offset;
+            if height <= radius * 1.001 {
+                continue;
             }
-        };
-        let mut path = Vec::new();
-        if let Attachment::Body(a) = j.a {
-            path.push(pix(&centre(a)));
-        }
-        path.push(pix(&anchor));
-        if let Attachment::Body(b) = j.b {
-            path.push(pix(&centre(b)));
-        }
-        area.draw(&PathElement::new(
-            path,
-            RGBColor(60, 60, 60).stroke_width(3),
-        ))
-        .map_err(e)?;
-        let (ax, ay) = pix(&anchor);
-        area.draw(&Circle::new((ax, ay), 4, RGBColor(40, 40, 40).filled()))
+            // Along gravity to the plane.
+            let foot = c - up * (height / f.normal.dot(&up));
+            let rp = (radius * cam.scale).round().max(2.0) as i32;
+            let (fx, fy) = pix(&foot);
+            area.draw(&Circle::new(
+                (fx, fy),
+                (0.8 * rp as f64) as i32,
+                RGBColor(120, 120, 115).mix(0.45).filled(),
+            ))
             .map_err(e)?;
+            area.draw(&PathElement::new(
+                vec![pix(&c), (fx, fy)],
+                RGBColor(110, 110, 110).stroke_width(1),
+            ))
+            .map_err(e)?;
+        }
     }
 
     // Spheres, farthest first.
@@ -303,14 +345,120 @@ fn draw_frame<DB: DrawingBackend>(
             lighten(base, 0.45).filled(),
         ))
         .map_err(e)?;
-        // The body-fixed dot, when on the visible half.
+        // The body-fixed dot: solid on the near half, a ring on the far
+        // half, so that a turn shows from every side.
         let m = marker(radius, &run.bodies[b].rows[i]);
+        let (mx, my) = pix(&m);
+        let size = (0.14 * rp as f64).max(2.0) as i32;
         if cam.depth(&m) < cam.depth(&c) {
-            let (mx, my) = pix(&m);
+            area.draw(&Circle::new((mx, my), size, RGBColor(20, 20, 20).filled()))
+                .map_err(e)?;
+        } else {
             area.draw(&Circle::new(
                 (mx, my),
-                (0.14 * rp as f64).max(2.0) as i32,
-                RGBColor(20, 20, 20).filled(),
+                size,
+                RGBColor(20, 20, 20).stroke_width(1),
+            ))
+            .map_err(e)?;
+        }
+        if model.bodies.len() <= 12 {
+            area.draw(&Text::new(
+                model.bodies[b].name.clone(),
+                (x + rp + 3, y - rp),
+                (FONT, 13).into_font().color(&RGBColor(40, 40, 40)),
+            ))
+            .map_err(e)?;
+        }
+    }
+
+    // Joints: links from each body's centre to the anchor, over the
+    // spheres (a skeleton, as robot viewers draw one).
+    for j in &model.joints {
+        let anchor = match j.a {
+            Attachment::World => j.local_a,
+            Attachment::Body(a) => {
+                let r = &run.bodies[a].rows[i];
+                let q = UnitQuaternion::from_quaternion(Quaternion::new(r[3], r[4], r[5], r[6]));
+                centre(a) + q.transform_vector(&j.local_a)
+            }
+        };
+        let mut path = Vec::new();
+        if let Attachment::Body(a) = j.a {
+            path.push(pix(&centre(a)));
+        }
+        path.push(pix(&anchor));
+        if let Attachment::Body(b) = j.b {
+            path.push(pix(&centre(b)));
+        }
+        thick(area, &path, RGBColor(60, 60, 60), 2).map_err(e)?;
+        let (ax, ay) = pix(&anchor);
+        area.draw(&Circle::new((ax, ay), 4, RGBColor(40, 40, 40).filled()))
+            .map_err(e)?;
+    }
+
+    // Contact forces of the step that ended in this state: an arrow that
+    // pushes at the contact point, from outside the body it acts on.
+    if i > 0 {
+        if let Some(h) = run.h() {
+            for ((kind, name), series) in &run.impulses {
+                let Some(Some(p)) = series.get(i - 1) else {
+                    continue;
+                };
+                if kind != "normal" {
+                    continue;
+                }
+                let Some(at) = contact_point(model, run, i, name) else {
+                    continue;
+                };
+                let f = Vector3::from(*p) / h;
+                let size = f.norm();
+                if size <= 0.0 {
+                    continue;
+                }
+                let dir = f / size;
+                let length = ARROW_PER_DECADE * (1.0 + (1.0 + size).log10());
+                let (hx, hy) = pix(&at);
+                // The direction on screen; a force along the view is a dot.
+                let (sx, sy) = (dir.dot(&cam.right), -dir.dot(&cam.up));
+                let on_screen = (sx * sx + sy * sy).sqrt();
+                let (tx, ty) = (
+                    hx - (length * sx).round() as i32,
+                    hy - (length * sy).round() as i32,
+                );
+                if on_screen < 1e-3 {
+                    continue;
+                }
+                let red = RGBColor(210, 30, 30);
+                thick(area, &[(tx, ty), (hx, hy)], red, 2).map_err(e)?;
+                // The head: two short strokes back from the tip.
+                let (dx, dy) = ((hx - tx) as f64, (hy - ty) as f64);
+                let n = (dx * dx + dy * dy).sqrt().max(1e-9);
+                let (ux, uy) = (dx / n, dy / n);
+                for side in [-1.0, 1.0] {
+                    let bx = hx as f64 - 7.0 * ux + side * 4.0 * uy;
+                    let by = hy as f64 - 7.0 * uy - side * 4.0 * ux;
+                    thick(
+                        area,
+                        &[(bx.round() as i32, by.round() as i32), (hx, hy)],
+                        red,
+                        2,
+                    )
+                    .map_err(e)?;
+                }
+            }
+        }
+    }
+    if let Some((t, step, status)) = &run.first_failure {
+        if run.t[i] >= *t {
+            area.draw(&Rectangle::new(
+                [(0, HEIGHT as i32 - 34), (WIDTH as i32, HEIGHT as i32)],
+                RGBColor(200, 0, 0).filled(),
+            ))
+            .map_err(e)?;
+            area.draw(&Text::new(
+                format!("step {step} failed: {status}; the state stays as it was"),
+                (12, HEIGHT as i32 - 28),
+                (FONT, 18).into_font().color(&WHITE),
             ))
             .map_err(e)?;
         }
@@ -324,6 +472,25 @@ fn draw_frame<DB: DrawingBackend>(
     Ok(())
 }
 
+/// Where contact `a/b` touches in state `i`: on sphere a, towards the
+/// plane or sphere b.
+fn contact_point(model: &Model, run: &RunData, i: usize, name: &str) -> Option<Vector3<f64>> {
+    let (a, b) = name.split_once('/')?;
+    let index = |n: &str| model.bodies.iter().position(|x| x.name == n);
+    let ia = index(a)?;
+    let Shape::Sphere { radius } = model.bodies[ia].shape;
+    let at = |k: usize| {
+        let r = &run.bodies[k].rows[i];
+        Vector3::new(r[0], r[1], r[2])
+    };
+    let ca = at(ia);
+    if let Some(ib) = index(b) {
+        return Some(ca + (at(ib) - ca).normalize() * radius);
+    }
+    let plane = model.planes.iter().find(|p| p.name == b)?;
+    Some(ca - plane.normal * radius)
+}
+
 /// Writes `animation.gif`; returns the number of frames.
 pub fn gif(
     model: &Model,
@@ -331,8 +498,19 @@ pub fn gif(
     run: &RunData,
     path: &Path,
 ) -> Result<usize, PlotError> {
+    gif_at(model, camera, run, path, FPS)
+}
+
+/// [`gif`] at `fps` frames per simulated second.
+pub fn gif_at(
+    model: &Model,
+    camera: Option<&cosim_shared::CameraDesc>,
+    run: &RunData,
+    path: &Path,
+    fps: f64,
+) -> Result<usize, PlotError> {
     let cam = Camera::frame(model, camera, run);
-    let (frames, delay) = frames(run);
+    let (frames, delay) = frames_at(run, fps);
     let fail = |m: String| PlotError::Draw(format!("{}: {m}", path.display()));
     let area = BitMapBackend::gif(path, (WIDTH, HEIGHT), delay)
         .map_err(|e| fail(e.to_string()))?

@@ -125,6 +125,9 @@ pub struct PlotOptions {
     /// The time window drawn (either end open).
     pub from: Option<f64>,
     pub to: Option<f64>,
+    /// Frames per simulated second of the animation (default
+    /// `animation::FPS`).
+    pub fps: Option<f64>,
 }
 
 /// The frame of a run folder's figures: its scene named when its
@@ -207,7 +210,8 @@ pub fn render(dir: &Path, opts: &PlotOptions) -> Result<Vec<PathBuf>, PlotError>
         }
         if opts.animation {
             let path = dir.join("animation.gif");
-            animation::gif(&model, scene.camera.as_ref(), &run, &path)?;
+            let fps = opts.fps.unwrap_or(animation::FPS);
+            animation::gif_at(&model, scene.camera.as_ref(), &run, &path, fps)?;
             files.push(path);
         }
         if opts.stills > 0 {
