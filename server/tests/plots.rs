@@ -433,6 +433,35 @@ fn two_runs_overlay_in_the_chosen_figures_and_window() {
     assert!(texts.contains(&"0.1") && texts.contains(&"0.3"));
     assert!(!texts.contains(&"0.4") && !texts.contains(&"0.05"));
 
+    // --bodies: only those bodies and their contacts.
+    let status = Command::new(BIN)
+        .arg("plot")
+        .arg(&a)
+        .args(["--bodies", "lower", "--only", "positions,normal_forces"])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let texts = |f: &str| {
+        std::fs::read_to_string(a.join("plots").join(f))
+            .unwrap()
+            .lines()
+            .map(|l| l.trim().to_string())
+            .collect::<Vec<_>>()
+    };
+    let positions = texts("positions.svg");
+    assert!(positions.contains(&"lower".to_string()) && !positions.contains(&"upper".to_string()));
+    let forces = texts("normal_forces.svg");
+    assert!(forces.contains(&"lower/floor".to_string()));
+    assert!(!forces.iter().any(|t| t == "upper/wall_y"), "{forces:?}");
+    let unknown = Command::new(BIN)
+        .arg("plot")
+        .arg(&a)
+        .args(["--bodies", "nobody"])
+        .output()
+        .unwrap();
+    assert_eq!(unknown.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&unknown.stderr).contains("upper, lower"));
+
     let bad = Command::new(BIN)
         .arg("plot")
         .arg(&a)

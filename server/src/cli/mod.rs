@@ -253,6 +253,9 @@ pub struct PlotArgs {
     /// errors, timings, solver, lcp_size).
     #[arg(long)]
     pub only: Option<String>,
+    /// Only these bodies (comma-separated names) and their contacts.
+    #[arg(long)]
+    pub bodies: Option<String>,
     /// Draw from this time on (s).
     #[arg(long)]
     pub from: Option<f64>,

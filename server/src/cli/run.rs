@@ -211,8 +211,10 @@ pub fn plot(args: &PlotArgs) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     }
-    // A window or a choice of figures is about the figures: no animation.
-    let focused = figure.only.is_some() || args.from.is_some() || args.to.is_some();
+    // A window or a choice of figures or bodies is about the figures: no
+    // animation.
+    let focused =
+        figure.only.is_some() || args.from.is_some() || args.to.is_some() || args.bodies.is_some();
     let opts = PlotOptions {
         figures: true,
         animation: !focused,
@@ -221,6 +223,10 @@ pub fn plot(args: &PlotArgs) -> ExitCode {
         from: args.from,
         to: args.to,
         fps: args.fps,
+        bodies: args
+            .bodies
+            .as_ref()
+            .map(|b| b.split(',').map(|s| s.trim().to_string()).collect()),
     };
     if let Some(other) = &args.other {
         let out = args.out.clone().unwrap_or_else(|| args.dir.join("compare"));

@@ -178,6 +178,27 @@ impl RunData {
         self
     }
 
+    /// The run with only the bodies named (in the run's order) and the
+    /// contacts that touch one of them; the joints stay.
+    /// An unknown name is an error that lists the bodies there are.
+    pub fn only_bodies(mut self, names: &[String]) -> Result<RunData, PlotError> {
+        if let Some(bad) = names
+            .iter()
+            .find(|n| !self.bodies.iter().any(|b| &b.name == *n))
+        {
+            let there: Vec<&str> = self.bodies.iter().map(|b| b.name.as_str()).collect();
+            return Err(PlotError::Read(format!(
+                "--bodies {bad:?} is not a body of this run; its bodies are {}",
+                there.join(", ")
+            )));
+        }
+        self.bodies.retain(|b| names.contains(&b.name));
+        self.impulses.retain(|(kind, name), _| {
+            kind == "joint" || name.split('/').any(|part| names.iter().any(|n| n == part))
+        });
+        Ok(self)
+    }
+
     /// The step size: the time of the first step report over its step.
     pub fn h(&self) -> Option<f64> {
         let step = *self.steps.get("step")?.first()?;

@@ -128,6 +128,19 @@ pub struct PlotOptions {
     /// Frames per simulated second of the animation (default
     /// `animation::FPS`).
     pub fps: Option<f64>,
+    /// Only these bodies (and their contacts) in the figures.
+    pub bodies: Option<Vec<String>>,
+}
+
+impl PlotOptions {
+    /// The part of `run` the figures show: the time window, the bodies.
+    fn focus(&self, run: data::RunData) -> Result<data::RunData, PlotError> {
+        let run = run.window(self.from, self.to);
+        match &self.bodies {
+            Some(names) => run.only_bodies(names),
+            None => Ok(run),
+        }
+    }
 }
 
 /// The frame of a run folder's figures: its scene named when its
@@ -150,7 +163,7 @@ pub fn render_overlay(
     opts: &PlotOptions,
 ) -> Result<Vec<PathBuf>, PlotError> {
     ensure_font()?;
-    let load = |d: &Path| Ok::<_, PlotError>(data::RunData::load(d)?.window(opts.from, opts.to));
+    let load = |d: &Path| opts.focus(data::RunData::load(d)?);
     let (ra, rb) = (load(a)?, load(b)?);
     let label = |d: &Path| {
         d.file_name().map_or_else(
@@ -193,7 +206,7 @@ pub fn render(dir: &Path, opts: &PlotOptions) -> Result<Vec<PathBuf>, PlotError>
         let plots = dir.join("plots");
         std::fs::create_dir_all(&plots)
             .map_err(|e| PlotError::Draw(format!("{}: {e}", plots.display())))?;
-        let run = full.clone().window(opts.from, opts.to);
+        let run = opts.focus(full.clone())?;
         files.extend(figures::all(&run, &plots, &frame_of(dir), &opts.figure)?);
     }
     let run = full;
