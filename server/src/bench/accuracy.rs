@@ -451,15 +451,15 @@ fn draw(
             .collect();
         line.sort_by(|a, b| a.0.total_cmp(&b.0));
         let c = color(i);
-        let style = if engine == "ours" {
-            c.stroke_width(2)
-        } else {
-            c.stroke_width(3)
-        };
+        // One-pixel paths side by side, in the image's pixels: plotters
+        // draws wider strokes wrongly in bitmaps (plotters issue 549).
+        let pixels: Vec<(i32, i32)> = line.iter().map(|p| chart.backend_coord(p)).collect();
+        crate::plot::thick_path(&root, &pixels, c, if engine == "ours" { 2 } else { 3 })
+            .map_err(|e| e.to_string())?;
         chart
-            .draw_series(LineSeries::new(line.clone(), style))?
+            .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())?
             .label(format!("{engine}: {setting}"))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3)));
+            .legend(move |(x, y)| Rectangle::new([(x, y - 1), (x + 20, y + 1)], c.filled()));
         if engine == "ours" {
             chart.draw_series(line.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
         } else {

@@ -173,23 +173,6 @@ pub fn marker(radius: f64, r: &[f64; 13]) -> Vector3<f64> {
     Vector3::new(r[0], r[1], r[2]) + q.transform_vector(&Vector3::x()) * (0.8 * radius)
 }
 
-/// A path `width` pixels wide as one-pixel paths side by side: plotters
-/// draws wider strokes wrongly in bitmaps (plotters issue 549).
-fn thick<DB: DrawingBackend>(
-    area: &DrawingArea<DB, plotters::coord::Shift>,
-    path: &[(i32, i32)],
-    color: RGBColor,
-    width: i32,
-) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    for dx in 0..width {
-        for dy in 0..width {
-            let p: Vec<(i32, i32)> = path.iter().map(|&(x, y)| (x + dx, y + dy)).collect();
-            area.draw(&PathElement::new(p, color.stroke_width(1)))?;
-        }
-    }
-    Ok(())
-}
-
 /// Length of a force arrow per decade of newtons (pixels), beyond a first
 /// decade's: 5 N draws 25 pixels, 10^5 N 84, whatever the zoom.
 const ARROW_PER_DECADE: f64 = 14.0;
@@ -390,7 +373,7 @@ fn draw_frame<DB: DrawingBackend>(
         if let Attachment::Body(b) = j.b {
             path.push(pix(&centre(b)));
         }
-        thick(area, &path, RGBColor(60, 60, 60), 2).map_err(e)?;
+        super::thick_path(area, &path, RGBColor(60, 60, 60), 2).map_err(e)?;
         let (ax, ay) = pix(&anchor);
         area.draw(&Circle::new((ax, ay), 4, RGBColor(40, 40, 40).filled()))
             .map_err(e)?;
@@ -429,7 +412,7 @@ fn draw_frame<DB: DrawingBackend>(
                     continue;
                 }
                 let red = RGBColor(210, 30, 30);
-                thick(area, &[(tx, ty), (hx, hy)], red, 2).map_err(e)?;
+                super::thick_path(area, &[(tx, ty), (hx, hy)], red, 2).map_err(e)?;
                 // The head: two short strokes back from the tip.
                 let (dx, dy) = ((hx - tx) as f64, (hy - ty) as f64);
                 let n = (dx * dx + dy * dy).sqrt().max(1e-9);
@@ -437,7 +420,7 @@ fn draw_frame<DB: DrawingBackend>(
                 for side in [-1.0, 1.0] {
                     let bx = hx as f64 - 7.0 * ux + side * 4.0 * uy;
                     let by = hy as f64 - 7.0 * uy - side * 4.0 * ux;
-                    thick(
+                    super::thick_path(
                         area,
                         &[(bx.round() as i32, by.round() as i32), (hx, hy)],
                         red,

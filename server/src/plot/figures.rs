@@ -263,8 +263,8 @@ fn draw<DB: DrawingBackend>(
                 // drawn as a piece and a dot, steep segments dotted, lines
                 // out of their panel;
                 // `a_known_series_is_drawn_where_it_must_be_and_nowhere_else`).
-                // A one-pixel path is drawn right, so the 2-pixel line is
-                // that path four times, a pixel apart, in the image's pixels.
+                // So the 2-pixel line is a one-pixel path four times, a
+                // pixel apart, in the image's pixels (`thick_path`).
                 let mut path: Vec<(i32, i32)> = Vec::new();
                 for (t, y) in decimate(run) {
                     let q = chart.backend_coord(&(t, scale.to_axis(y)));
@@ -284,18 +284,7 @@ fn draw<DB: DrawingBackend>(
                         ))
                         .map_err(e)?;
                 }
-                let offsets: &[(i32, i32)] = if s.thin {
-                    &[(0, 0)]
-                } else {
-                    &[(0, 0), (1, 0), (0, 1), (1, 1)]
-                };
-                for &(dx, dy) in offsets {
-                    let shifted: Vec<(i32, i32)> =
-                        path.iter().map(|&(x, y)| (x + dx, y + dy)).collect();
-                    canvas
-                        .draw(&PathElement::new(shifted, c.stroke_width(1)))
-                        .map_err(e)?;
-                }
+                super::thick_path(&canvas, &path, c, if s.thin { 1 } else { 2 }).map_err(e)?;
             }
         }
         if let Some((t, step, status)) = &frame.failure {

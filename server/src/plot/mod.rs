@@ -30,6 +30,27 @@ pub fn ensure_font() -> Result<(), PlotError> {
     }
 }
 
+/// A path `width` pixels wide, drawn as one-pixel paths side by side
+/// (`width` x `width` offsets): plotters' bitmap backend draws strokes
+/// wider than a pixel wrongly (plotters issue 549: spikes drawn as a piece
+/// and a dot, steep segments dotted, lines out of their panel), and a
+/// one-pixel path right. `path` is in the area's pixels.
+pub fn thick_path<DB: plotters::prelude::DrawingBackend>(
+    area: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+    path: &[(i32, i32)],
+    color: RGBColor,
+    width: i32,
+) -> Result<(), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>> {
+    use plotters::prelude::*;
+    for dx in 0..width.max(1) {
+        for dy in 0..width.max(1) {
+            let p: Vec<(i32, i32)> = path.iter().map(|&(x, y)| (x + dx, y + dy)).collect();
+            area.draw(&PathElement::new(p, color.stroke_width(1)))?;
+        }
+    }
+    Ok(())
+}
+
 /// A log-log chart as the benchmarks draw them.
 pub type LogLog<'a, 'b> = plotters::chart::ChartContext<
     'a,
