@@ -453,6 +453,24 @@ fn two_runs_overlay_in_the_chosen_figures_and_window() {
     let forces = texts("normal_forces.svg");
     assert!(forces.contains(&"lower/floor".to_string()));
     assert!(!forces.iter().any(|t| t == "upper/wall_y"), "{forces:?}");
+    // --per-contact: a panel per contact (default height: 260 a panel).
+    let status = Command::new(BIN)
+        .arg("plot")
+        .arg(&a)
+        .args(["--per-contact", "--only", "normal_forces"])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let csv = std::fs::read_to_string(a.join("impulses.csv")).unwrap();
+    let mut contacts: Vec<&str> = csv
+        .lines()
+        .filter_map(|l| l.split(',').nth(3).filter(|_| l.contains(",normal,")))
+        .collect();
+    contacts.sort();
+    contacts.dedup();
+    assert!(contacts.len() >= 2, "{contacts:?}");
+    let png = image::open(a.join("plots/normal_forces.png")).unwrap();
+    assert_eq!(png.height(), 200 + 260 * contacts.len() as u32);
     let unknown = Command::new(BIN)
         .arg("plot")
         .arg(&a)

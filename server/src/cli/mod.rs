@@ -256,6 +256,10 @@ pub struct PlotArgs {
     /// Only these bodies (comma-separated names) and their contacts.
     #[arg(long)]
     pub bodies: Option<String>,
+    /// A panel per contact and joint in the force figures, each with its
+    /// own axis, so that one impact does not flatten the others.
+    #[arg(long)]
+    pub per_contact: bool,
     /// Draw from this time on (s).
     #[arg(long)]
     pub from: Option<f64>,

@@ -198,6 +198,7 @@ pub fn plot(args: &PlotArgs) -> ExitCode {
             .as_ref()
             .map(|o| o.split(',').map(|s| s.trim().to_string()).collect()),
         size,
+        per_contact: args.per_contact,
     };
     if let Some(only) = &figure.only {
         if let Some(bad) = only

@@ -498,6 +498,37 @@ pub struct Options {
     /// Image size in pixels (width, height); 1100 wide and 260 a panel
     /// when `None`.
     pub size: Option<(u32, u32)>,
+    /// A panel per contact or joint in the force figures, each with its
+    /// own axis (up to [`MAX_SPLIT`] of them).
+    pub per_contact: bool,
+}
+
+/// Most panels a force figure is split into with `per_contact`; a figure
+/// with more series keeps them in one panel.
+pub const MAX_SPLIT: usize = 24;
+
+impl Panel {
+    /// One panel per series, each named after it (forces keep their
+    /// per-panel axis choice).
+    fn split(self) -> Vec<Panel> {
+        let Panel {
+            ylabel,
+            series,
+            counts,
+            scale,
+            forces,
+        } = self;
+        series
+            .into_iter()
+            .map(|s| Panel {
+                ylabel: format!("{} {ylabel}", s.name),
+                series: vec![s],
+                counts,
+                scale,
+                forces,
+            })
+            .collect()
+    }
 }
 
 /// The time axis of a run: from its first state to its last.
@@ -525,9 +556,13 @@ fn draw_specs(
                 continue;
             }
         }
+        let split = opts.per_contact
+            && spec.stem.ends_with("_forces")
+            && spec.panels.iter().map(|p| p.series.len()).sum::<usize>() <= MAX_SPLIT;
         let panels: Vec<Panel> = spec
             .panels
             .into_iter()
+            .flat_map(|p| if split { p.split() } else { vec![p] })
             .filter(Panel::has_data)
             .map(Panel::settle)
             .collect();
