@@ -23,6 +23,7 @@
 //! - `/forces/KIND/NAME` (`cosim.Force`, N: the step's impulse over h),
 //!   one per step in which that contact or joint had an impulse.
 
+use crate::engine::Model;
 use crate::plot::data::RunData;
 use cosim_shared::scene::WORLD;
 use cosim_shared::Scene;
@@ -64,8 +65,13 @@ const ARROW_PER_DECADE: f64 = 0.05;
 /// Side of the square drawn for a plane (m).
 const PLANE_SIDE: f64 = 4.0;
 
+/// A time in s as the recording's nanoseconds.
+fn nanos(t: f64) -> u64 {
+    (t.max(0.0) * 1e9).round() as u64
+}
+
 fn time(t: f64) -> Value {
-    let ns = (t.max(0.0) * 1e9).round() as u64;
+    let ns = nanos(t);
     json!({ "sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000 })
 }
 
@@ -170,7 +176,7 @@ impl Out {
 
     fn put(&mut self, channel: u16, topic: &str, t: f64, msg: &Value) -> Result<(), McapError> {
         let count = self.written.messages.entry(topic.to_string()).or_default();
-        let ns = (t.max(0.0) * 1e9).round() as u64;
+        let ns = nanos(t);
         let header = mcap::records::MessageHeader {
             channel_id: channel,
             sequence: *count as u32,
@@ -209,8 +215,8 @@ pub fn write(dir: &Path, path: &Path) -> Result<Written, McapError> {
         topics: BTreeMap::new(),
         schemas: BTreeMap::new(),
     };
-    states(&mut out, &run, &scene)?;
-    steps(&mut out, &run, &scene)?;
+    states(&mut out, &run, &scene, &Model::from_scene(&scene))?;
+    steps(&mut out, &run)?;
     out.w
         .finish()
         .map_err(|e| McapError::Write(e.to_string()))?;
@@ -218,7 +224,7 @@ pub fn write(dir: &Path, path: &Path) -> Result<Written, McapError> {
 }
 
 /// Everything per state: the scene, the transforms, the body states.
-fn states(out: &mut Out, run: &RunData, scene: &Scene) -> Result<(), McapError> {
+fn states(out: &mut Out, run: &RunData, scene: &Scene, model: &Model) -> Result<(), McapError> {
     let scene_schema = out.schema(
         "foxglove.SceneUpdate",
         object_schema(
@@ -315,7 +321,7 @@ fn states(out: &mut Out, run: &RunData, scene: &Scene) -> Result<(), McapError> 
                 if kind != "normal" {
                     continue;
                 }
-                let Some(at) = contact_point(name, scene, &index, &poses) else {
+                let Some(at) = crate::plot::contact_point(model, run, i, name) else {
                     continue;
                 };
                 let f = Vector3::from(*p) / h;
@@ -369,27 +375,8 @@ fn states(out: &mut Out, run: &RunData, scene: &Scene) -> Result<(), McapError> 
     Ok(())
 }
 
-/// Where contact `a/b` touches: on sphere a, towards the plane or sphere b.
-fn contact_point(
-    name: &str,
-    scene: &Scene,
-    index: &BTreeMap<&str, usize>,
-    poses: &[(Vector3<f64>, UnitQuaternion<f64>)],
-) -> Option<Vector3<f64>> {
-    let (a, b) = name.split_once('/')?;
-    let ia = *index.get(a)?;
-    let (ca, ra) = (poses[ia].0, scene.bodies[ia].radius);
-    if let Some(&ib) = index.get(b) {
-        let d = poses[ib].0 - ca;
-        return Some(ca + d.normalize() * ra);
-    }
-    let plane = scene.planes.iter().find(|p| p.name == b)?;
-    let n = Vector3::from(plane.normal).normalize();
-    Some(ca - n * ra)
-}
-
 /// Everything per step: energy, the solver's report, forces.
-fn steps(out: &mut Out, run: &RunData, _scene: &Scene) -> Result<(), McapError> {
+fn steps(out: &mut Out, run: &RunData) -> Result<(), McapError> {
     let energy_schema = out.schema(
         "cosim.Energy",
         object_schema(

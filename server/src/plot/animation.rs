@@ -390,7 +390,7 @@ fn draw_frame<DB: DrawingBackend>(
                 if kind != "normal" {
                     continue;
                 }
-                let Some(at) = contact_point(model, run, i, name) else {
+                let Some(at) = super::contact_point(model, run, i, name) else {
                     continue;
                 };
                 let f = Vector3::from(*p) / h;
@@ -453,25 +453,6 @@ fn draw_frame<DB: DrawingBackend>(
     ))
     .map_err(e)?;
     Ok(())
-}
-
-/// Where contact `a/b` touches in state `i`: on sphere a, towards the
-/// plane or sphere b.
-fn contact_point(model: &Model, run: &RunData, i: usize, name: &str) -> Option<Vector3<f64>> {
-    let (a, b) = name.split_once('/')?;
-    let index = |n: &str| model.bodies.iter().position(|x| x.name == n);
-    let ia = index(a)?;
-    let Shape::Sphere { radius } = model.bodies[ia].shape;
-    let at = |k: usize| {
-        let r = &run.bodies[k].rows[i];
-        Vector3::new(r[0], r[1], r[2])
-    };
-    let ca = at(ia);
-    if let Some(ib) = index(b) {
-        return Some(ca + (at(ib) - ca).normalize() * radius);
-    }
-    let plane = model.planes.iter().find(|p| p.name == b)?;
-    Some(ca - plane.normal * radius)
 }
 
 /// Writes `animation.gif`; returns the number of frames.

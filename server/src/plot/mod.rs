@@ -4,8 +4,11 @@ pub mod animation;
 pub mod data;
 pub mod figures;
 
+use crate::engine::model::Shape;
 use crate::engine::Model;
 use cosim_shared::Scene;
+use data::RunData;
+use nalgebra::Vector3;
 use plotters::prelude::RGBColor;
 use std::path::{Path, PathBuf};
 use std::sync::Once;
@@ -49,6 +52,26 @@ pub fn thick_path<DB: plotters::prelude::DrawingBackend>(
         }
     }
     Ok(())
+}
+
+/// Where contact `a/b` (a name of impulses.csv) touches in state `i`: on
+/// sphere a, towards the plane or sphere b. The animation's arrows and the
+/// MCAP recording's start there.
+pub fn contact_point(model: &Model, run: &RunData, i: usize, name: &str) -> Option<Vector3<f64>> {
+    let (a, b) = name.split_once('/')?;
+    let index = |n: &str| model.bodies.iter().position(|x| x.name == n);
+    let ia = index(a)?;
+    let Shape::Sphere { radius } = model.bodies[ia].shape;
+    let at = |k: usize| {
+        let r = &run.bodies[k].rows[i];
+        Vector3::new(r[0], r[1], r[2])
+    };
+    let ca = at(ia);
+    if let Some(ib) = index(b) {
+        return Some(ca + (at(ib) - ca).normalize() * radius);
+    }
+    let plane = model.planes.iter().find(|p| p.name == b)?;
+    Some(ca - plane.normal * radius)
 }
 
 /// A log-log chart as the benchmarks draw them.

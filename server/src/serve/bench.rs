@@ -390,6 +390,20 @@ fn lockstep_of(
     })
 }
 
+impl Lockstep {
+    /// This measurement's row of the table, labelled `lockstep, WHAT`.
+    fn row(&self, what: &str) -> String {
+        format!(
+            "| lockstep, {what} | {:.0} | {:.2} | {:.2} / {:.2} | {:.2} |\n",
+            self.steps_per_s,
+            self.round_trip_us,
+            self.compute_us,
+            self.compute_mean_us,
+            self.overhead_us
+        )
+    }
+}
+
 /// The server name of a lockstep run: unique per bench process and row.
 fn run_name(controllers: usize, mode: WaitMode, sidecar: Option<&str>) -> String {
     format!(
@@ -645,16 +659,11 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
                 steps
             };
             let r = lockstep(n, mode, s.max(100), None)?;
-            out.push_str(&format!(
-                "| lockstep, {n} controller{}, {} | {:.0} | {:.2} | {:.2} / {:.2} | {:.2} |\n",
+            out.push_str(&r.row(&format!(
+                "{n} controller{}, {}",
                 if n > 1 { "s" } else { "" },
-                mode.as_str(),
-                r.steps_per_s,
-                r.round_trip_us,
-                r.compute_us,
-                r.compute_mean_us,
-                r.overhead_us
-            ));
+                mode.as_str()
+            )));
             rows.push((n, mode, r));
         }
     }
@@ -666,15 +675,10 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
                 continue;
             }
             let r = lockstep_of(Client::Python, 1, mode, steps, None)?;
-            out.push_str(&format!(
-                "| lockstep, 1 Python controller (cosim package), {} | {:.0} | {:.2} | {:.2} / {:.2} | {:.2} |\n",
-                mode.as_str(),
-                r.steps_per_s,
-                r.round_trip_us,
-                r.compute_us,
-                r.compute_mean_us,
-                r.overhead_us
-            ));
+            out.push_str(&r.row(&format!(
+                "1 Python controller (cosim package), {}",
+                mode.as_str()
+            )));
         }
     } else {
         out.push_str("| lockstep, 1 Python controller | skipped: python3 does not import the cosim package (pip install ./python) | - | - | - |\n");
@@ -779,15 +783,10 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
     }
     for mode in [WaitMode::Spin, WaitMode::Hybrid] {
         let r = lockstep(1, mode, steps, Some("recorder"))?;
-        out.push_str(&format!(
-            "| lockstep, 1 controller, {}, + recorder process (every frame, woken for each) | {:.0} | {:.2} | {:.2} / {:.2} | {:.2} |\n",
-            mode.as_str(),
-            r.steps_per_s,
-            r.round_trip_us,
-            r.compute_us,
-            r.compute_mean_us,
-            r.overhead_us
-        ));
+        out.push_str(&r.row(&format!(
+            "1 controller, {}, + recorder process (every frame, woken for each)",
+            mode.as_str()
+        )));
     }
     out.push_str(&footer);
     Ok(out)
