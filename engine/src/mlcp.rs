@@ -334,6 +334,24 @@ impl Mlcp {
         self.matrix_of = None;
     }
 
+    /// The contact list was listed again with more pairs (the broad phase
+    /// widened, `Engine::widen`): the same contacts, at new indices. Points
+    /// `lcp_contacts` at them by id (both lists ascend by id, and the new
+    /// one holds every old one), so that the matrix and the answer, made
+    /// for the same rows, stay valid. `old_id(ci)`: the id of the old list's
+    /// contact `ci`.
+    pub fn remap(&mut self, old_id: impl Fn(usize) -> usize, contacts: &[Contact]) {
+        let mut at = 0;
+        for ci in self.lcp_contacts.iter_mut() {
+            let id = old_id(*ci);
+            while contacts[at].id < id {
+                at += 1;
+            }
+            debug_assert_eq!(contacts[at].id, id, "a widened list keeps every contact");
+            *ci = at;
+        }
+    }
+
     /// Makes the matrix part for the contacts marked `in_lcp`: kept when it
     /// was made at these positions for exactly those contacts, cut down by
     /// [`Mlcp::restrict`] when they are fewer, built afresh otherwise. The

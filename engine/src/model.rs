@@ -104,6 +104,8 @@ pub struct Params {
     pub position_update: cosim_shared::PositionUpdate,
     /// Sleeping islands at rest (`sleep.rs`); `None`: every body steps.
     pub sleep: Option<super::sleep::Sleep>,
+    /// The iterative solver's stopping rule (the scene's `[sim.pgs]`).
+    pub pgs: crate::solver::PgsParams,
 }
 
 /// A spring of stiffness `k` (N/m) and a damper `c` (N s/m) along a
@@ -324,6 +326,17 @@ impl Model {
                     after: d.after,
                     linear: d.linear_speed,
                     angular: d.angular_speed,
+                }),
+                pgs: s.pgs.map_or_else(crate::solver::PgsParams::default, |d| {
+                    crate::solver::PgsParams {
+                        velocity_tolerance: d.tolerance,
+                        max_iterations: d.max_iterations,
+                        stop: match d.stop {
+                            cosim_shared::PgsStop::Distance => crate::solver::pgs::Stop::Distance,
+                            cosim_shared::PgsStop::Residual => crate::solver::pgs::Stop::Residual,
+                        },
+                        ..Default::default()
+                    }
                 }),
             },
             initial,

@@ -12,6 +12,6 @@ pub const STATES_HEADER: &str = "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz
 pub const IMPULSES_HEADER: &str = "step,t,kind,name,body_a,body_b,px,py,pz";
 
 pub use scene::{
-    BodyDesc, CameraDesc, FrictionCone, JointDesc, JointKind, PlaneDesc, PositionUpdate, Scene,
-    SceneError, SimDesc, SolverChoice,
+    BodyDesc, CameraDesc, FrictionCone, JointDesc, JointKind, PgsDesc, PgsStop, PlaneDesc,
+    PositionUpdate, Scene, SceneError, SimDesc, SolverChoice,
 };

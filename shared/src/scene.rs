@@ -189,6 +189,42 @@ pub struct SimDesc {
     /// to).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sleep: Option<SleepDesc>,
+    /// `[sim.pgs]`: when the iterative solver stops (absent: its defaults,
+    /// the distance rule at 1e-6 m/s, for agreement with Lemke).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pgs: Option<PgsDesc>,
+}
+
+/// `[sim.pgs]`: the iterative solver's stopping rule.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PgsDesc {
+    /// "distance" (to the answer, by the rate of convergence) or
+    /// "residual" (the constraint violation of the last sweep).
+    #[serde(default)]
+    pub stop: PgsStop,
+    /// What the rule bounds, m/s.
+    #[serde(default = "default_pgs_tolerance")]
+    pub tolerance: f64,
+    /// The sweep cap: a safety net.
+    #[serde(default = "default_pgs_max_iterations")]
+    pub max_iterations: usize,
+}
+
+/// `[sim.pgs] stop`.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum PgsStop {
+    #[default]
+    Distance,
+    Residual,
+}
+
+fn default_pgs_tolerance() -> f64 {
+    1e-6
+}
+fn default_pgs_max_iterations() -> usize {
+    5000
 }
 
 /// `[sim.sleep]`: Box2D's and Rapier's defaults scaled to metres.
@@ -451,6 +487,15 @@ impl Scene {
             positive(sleep.linear_speed).map_err(|m| err("sim.sleep.linear_speed".into(), m))?;
             positive(sleep.angular_speed).map_err(|m| err("sim.sleep.angular_speed".into(), m))?;
         }
+        if let Some(pgs) = &sim.pgs {
+            positive(pgs.tolerance).map_err(|m| err("sim.pgs.tolerance".into(), m))?;
+            if pgs.max_iterations == 0 {
+                return Err(err(
+                    "sim.pgs.max_iterations".into(),
+                    "= 0: must be at least 1".into(),
+                ));
+            }
+        }
 
         // (name, field that first used it), to refuse duplicates by name.
         let mut names: Vec<(String, String)> = Vec::new();
@@ -684,6 +729,25 @@ position = [0.0, 0.0, 0.5]
         assert_eq!(s.step_count(), 1000);
         // Written out and read back, it is the same scene.
         assert_eq!(Scene::parse(&s.to_toml(), "again.toml"), Ok(s));
+    }
+
+    #[test]
+    fn pgs_stopping_rule_is_read_and_checked() {
+        let with = |table: &str| {
+            MINIMAL.replace("\n[[body]]", &format!("\n[sim.pgs]\n{table}\n\n[[body]]"))
+        };
+        let s =
+            Scene::parse(&with("stop = \"residual\"\ntolerance = 0.01"), "t.toml").expect("valid");
+        let pgs = s.sim.pgs.expect("read");
+        assert_eq!((pgs.stop, pgs.tolerance), (PgsStop::Residual, 0.01));
+        assert_eq!(pgs.max_iterations, 5000);
+        assert_eq!(Scene::parse(&s.to_toml(), "again.toml"), Ok(s));
+        let e = Scene::parse(&with("tolerance = -1.0"), "t.toml").unwrap_err();
+        assert_eq!(e.field, "sim.pgs.tolerance", "{e}");
+        let e = Scene::parse(&with("max_iterations = 0"), "t.toml").unwrap_err();
+        assert_eq!(e.field, "sim.pgs.max_iterations", "{e}");
+        let e = Scene::parse(&with("stop = \"sometimes\""), "t.toml").unwrap_err();
+        assert!(e.to_string().contains("sometimes"), "{e}");
     }
 
     #[test]

@@ -37,10 +37,14 @@ struct Args {
     /// Steps of each pile run.
     #[arg(long, default_value_t = 500)]
     pile_steps: u64,
-    /// Our engine runs the piles up to this size only (at 1,000 spheres
-    /// our settling steps take seconds each).
-    #[arg(long, default_value_t = 100)]
+    /// Our engine runs the piles up to this size only.
+    #[arg(long, default_value_t = 4000)]
     ours_up_to: usize,
+    /// Our PGS tolerances (m/s, the residual rule): the first is run with
+    /// sleeping off and on, the others with sleeping off, as points of the
+    /// work-precision figure.
+    #[arg(long, value_delimiter = ',', default_value = "1e-2,3e-2,3e-3")]
+    ours_tolerances: Vec<f64>,
     /// Also write the pile table to this file.
     #[arg(long)]
     pile_out: Option<PathBuf>,
@@ -52,11 +56,18 @@ struct Args {
 
 fn piles(args: &Args) -> ExitCode {
     use cosim_server::bench::pile::Settings;
+    use cosim_server::engine::solver::{pgs::Stop, PgsParams};
+    // The pile scene's own rule (`bench::pile::PGS`) at each tolerance.
+    let rule = |tolerance: f64| PgsParams {
+        stop: Stop::Residual,
+        velocity_tolerance: tolerance,
+        ..PgsParams::default()
+    };
     let settings = Settings {
         dt: 0.01,
         steps: args.pile_steps,
-        solver: "pgs".into(),
-        pgs: Default::default(),
+        solver: "auto".into(),
+        pgs: rule(args.ours_tolerances.first().copied().unwrap_or(1e-2)),
         seed: 1,
         trace: 0,
         sleep: false,
@@ -64,16 +75,20 @@ fn piles(args: &Args) -> ExitCode {
     let mut rows = Vec::new();
     for &n in &args.pile {
         if n <= args.ours_up_to {
-            for sleep in [false, true] {
-                let r = pile::ours(
-                    n,
-                    &Settings {
-                        sleep,
-                        ..settings.clone()
-                    },
-                );
-                eprintln!("{r:?}");
-                rows.push(r);
+            for (k, &tolerance) in args.ours_tolerances.iter().enumerate() {
+                let sleeps: &[bool] = if k == 0 { &[false, true] } else { &[false] };
+                for &sleep in sleeps {
+                    let r = pile::ours(
+                        n,
+                        &Settings {
+                            sleep,
+                            pgs: rule(tolerance),
+                            ..settings.clone()
+                        },
+                    );
+                    eprintln!("{r:?}");
+                    rows.push(r);
+                }
             }
         }
         for sleep in [false, true] {

@@ -17,7 +17,7 @@
 //! contact's index stays its identity and the LCP's row order is the one of
 //! the full enumeration (the pruned and full runs give the same bits).
 //!
-//! Cost: sorting N keys and 27 N lookups; no allocation once the buffers
+//! Cost: sorting N keys and 9 N lookups; no allocation once the buffers
 //! have seen the largest scene. A scene of very unequal spheres (one of
 //! 10 m among 1 mm ones) makes the cells coarse and the grid a sweep over
 //! many bodies per cell: correct, not fast.
@@ -77,11 +77,24 @@ impl Broad {
             let c = cell_of(&xa, size);
             for dx in -1..=1 {
                 for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        let k = key([c[0] + dx, c[1] + dy, c[2] + dz]);
-                        let start = self.cells.partition_point(|&(ck, _)| ck < k);
+                    // The three cells along z are one run of keys (z is the
+                    // key's low field) unless the field wraps there: one
+                    // search for the three, not three.
+                    let (lo, hi) = (
+                        key([c[0] + dx, c[1] + dy, c[2] - 1]),
+                        key([c[0] + dx, c[1] + dy, c[2] + 1]),
+                    );
+                    let mid = key([c[0] + dx, c[1] + dy, c[2]]);
+                    let split = [(lo, lo), (mid, mid), (hi, hi)];
+                    let runs = if hi.wrapping_sub(lo) == 2 {
+                        &[(lo, hi)][..]
+                    } else {
+                        &split[..]
+                    };
+                    for &(from, to) in runs {
+                        let start = self.cells.partition_point(|&(ck, _)| ck < from);
                         for &(ck, b) in &self.cells[start..] {
-                            if ck != k {
+                            if ck > to {
                                 break;
                             }
                             let b = b as usize;

@@ -5,6 +5,7 @@
 //! natural-map residual `||z - max(0, z - w)||` with `w = M z + q`, the
 //! measure Siconos uses for its test corpus.
 
+pub mod cone;
 pub mod lemke;
 pub mod pgs;
 

@@ -198,7 +198,7 @@ pub fn measure(steps: u64) -> Result<Vec<Measured>, String> {
     let gas = gas()?;
     // Each skip: its scene and solver, and how to switch it off.
     type Off = fn(&mut Params);
-    let cases: [(&'static str, &'static str, &Scene, SolverChoice, Off); 5] = [
+    let cases: [(&'static str, &'static str, &Scene, SolverChoice, Off); 6] = [
         (
             "broad phase (sphere pairs within reach)",
             "gas of 64 spheres, Lemke",
@@ -211,6 +211,13 @@ pub fn measure(steps: u64) -> Result<Vec<Measured>, String> {
             "reference, Lemke",
             &reference,
             SolverChoice::Lemke,
+            |p| p.full = true,
+        ),
+        (
+            "pruning with PGS (no canonical re-solve)",
+            "reference, PGS",
+            &reference,
+            SolverChoice::Pgs,
             |p| p.full = true,
         ),
         (

@@ -158,12 +158,17 @@ pub enum BenchWhat {
         /// Print every K-th step's report to stderr.
         #[arg(long, default_value_t = 0)]
         trace: u64,
-        /// PGS: stop when no update changes a velocity by more (m/s).
-        #[arg(long, default_value_t = crate::engine::solver::pgs::DEFAULT_VELOCITY_TOLERANCE)]
+        /// PGS: the stopping rule's tolerance (m/s); the pile scene's own
+        /// (`bench::pile::PGS`) by default.
+        #[arg(long, default_value_t = 1e-2)]
         velocity_tolerance: f64,
         /// PGS: sweep cap.
         #[arg(long, default_value_t = crate::engine::solver::pgs::DEFAULT_MAX_ITERATIONS)]
         max_iterations: usize,
+        /// PGS: what the velocity tolerance bounds, `distance` (to the
+        /// answer) or `residual` (the constraint violation).
+        #[arg(long, default_value = "residual")]
+        stop: crate::engine::solver::pgs::Stop,
         /// PGS: plain sweeps, without the NNCG momentum step.
         #[arg(long)]
         no_momentum: bool,
@@ -457,6 +462,7 @@ pub fn main() -> ExitCode {
                     trace,
                     velocity_tolerance,
                     max_iterations,
+                    stop,
                     no_momentum,
                     sleep,
                     out,
@@ -471,6 +477,7 @@ pub fn main() -> ExitCode {
                     velocity_tolerance,
                     max_iterations,
                     momentum: !no_momentum,
+                    stop,
                     ..Default::default()
                 },
                 seed,

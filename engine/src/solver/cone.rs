@@ -1,0 +1,231 @@
+//! The friction cone's geometry for the iterative solver: projections onto
+//! the polyhedral cone's polygon (vertices `mu p_n d_j`), the disc and the
+//! second-order cone, and the 2-D tangential impulse written on, and read
+//! from, the `n_d` friction directions.
+//!
+//! [`Polygon`] holds the directions and edge normals of one `n_d` as
+//! tables: a friction block's update in a sweep then costs no sine or
+//! cosine. Measured on the 1,000-sphere pile: the trigonometry of the
+//! direction coefficients was most of a sweep's time. The tables hold the
+//! same expressions' values as [`direction`], so both give the same bits.
+
+use crate::contact::direction_coefficients as direction;
+
+/// The polygon of the polyhedral cone with `n_d` directions, tabulated.
+#[derive(Debug, Default, Clone)]
+pub struct Polygon {
+    nd: usize,
+    /// `d_j = (cos, sin)` for `j = 0..=n_d` (`d_nd` closes the polygon).
+    dirs: Vec<(f64, f64)>,
+    /// The outward normal of edge `j` (from `d_j` to `d_j+1`).
+    normals: Vec<(f64, f64)>,
+    /// `cos(pi / n_d)`: the apothem of the polygon of unit radius.
+    cos_half: f64,
+}
+
+impl Polygon {
+    /// The tables for `nd` directions (kept when they are for it already).
+    pub fn set(&mut self, nd: usize) {
+        if self.nd == nd && !self.dirs.is_empty() {
+            return;
+        }
+        self.nd = nd;
+        self.dirs.clear();
+        self.dirs.extend((0..=nd).map(|j| direction(j, nd)));
+        self.normals.clear();
+        self.normals.extend((0..nd).map(|j| edge_normal(j, nd)));
+        self.cos_half = (std::f64::consts::PI / nd as f64).cos();
+    }
+
+    /// [`project_polygon`] from the tables.
+    pub fn project(&self, x: [f64; 2], cap: f64) -> [f64; 2] {
+        project_with(
+            x,
+            cap,
+            self.nd,
+            self.cos_half,
+            |j| self.normals[j],
+            |j| self.dirs[j],
+        )
+    }
+
+    /// [`decompose`] from the tables.
+    pub fn decompose(&self, p: [f64; 2], out: &mut [f64]) {
+        decompose_with(p, self.nd, |j| self.dirs[j], out)
+    }
+
+    /// [`tangential`] from the tables.
+    pub fn tangential(&self, block: &[f64]) -> [f64; 2] {
+        tangential_with(block, |j| self.dirs[j])
+    }
+}
+
+/// The outward normal of the polygon's edge `j`, at angle `2 pi j / n_d +
+/// pi / n_d`.
+fn edge_normal(j: usize, nd: usize) -> (f64, f64) {
+    let half = std::f64::consts::PI / nd as f64;
+    let a = std::f64::consts::TAU * j as f64 / nd as f64 + half;
+    (a.cos(), a.sin())
+}
+
+/// The point of the polygon with vertices `cap d_j` (the polyhedral cone at
+/// normal impulse `cap / mu`) nearest to `x`, in tangent-plane coordinates.
+pub fn project_polygon(x: [f64; 2], cap: f64, nd: usize) -> [f64; 2] {
+    let cos_half = (std::f64::consts::PI / nd as f64).cos();
+    project_with(
+        x,
+        cap,
+        nd,
+        cos_half,
+        |j| edge_normal(j, nd),
+        |j| direction(j, nd),
+    )
+}
+
+fn project_with(
+    x: [f64; 2],
+    cap: f64,
+    nd: usize,
+    cos_half: f64,
+    normal: impl Fn(usize) -> (f64, f64),
+    dir: impl Fn(usize) -> (f64, f64),
+) -> [f64; 2] {
+    if cap <= 0.0 {
+        return [0.0, 0.0];
+    }
+    // Inside: within every edge's supporting line.
+    let apothem = cap * cos_half;
+    let inside = (0..nd).all(|j| {
+        let (c, s) = normal(j);
+        c * x[0] + s * x[1] <= apothem
+    });
+    if inside {
+        return x;
+    }
+    // Else the nearest point of the nearest edge.
+    let mut best = [0.0, 0.0];
+    let mut best_d = f64::INFINITY;
+    for j in 0..nd {
+        let (c0, s0) = dir(j);
+        let (c1, s1) = dir(j + 1);
+        let (p0, p1) = ([cap * c0, cap * s0], [cap * c1, cap * s1]);
+        let e = [p1[0] - p0[0], p1[1] - p0[1]];
+        let t = (((x[0] - p0[0]) * e[0] + (x[1] - p0[1]) * e[1]) / (e[0] * e[0] + e[1] * e[1]))
+            .clamp(0.0, 1.0);
+        let q = [p0[0] + t * e[0], p0[1] + t * e[1]];
+        let d = (q[0] - x[0]).powi(2) + (q[1] - x[1]).powi(2);
+        if d < best_d {
+            best_d = d;
+            best = q;
+        }
+    }
+    best
+}
+
+/// The 2-D tangential impulse of a friction block: `sum_j p_j d_j`.
+pub fn tangential(block: &[f64]) -> [f64; 2] {
+    let nd = block.len();
+    tangential_with(block, |j| direction(j, nd))
+}
+
+fn tangential_with(block: &[f64], dir: impl Fn(usize) -> (f64, f64)) -> [f64; 2] {
+    let mut pt = [0.0, 0.0];
+    for (j, p) in block.iter().enumerate() {
+        let (c, s) = dir(j);
+        pt[0] += p * c;
+        pt[1] += p * s;
+    }
+    pt
+}
+
+/// Writes the 2-D tangential impulse `p` as nonnegative impulses on the two
+/// friction directions that bracket it (the others zero).
+pub fn decompose(p: [f64; 2], nd: usize, out: &mut [f64]) {
+    decompose_with(p, nd, |j| direction(j, nd), out)
+}
+
+fn decompose_with(p: [f64; 2], nd: usize, dir: impl Fn(usize) -> (f64, f64), out: &mut [f64]) {
+    out.fill(0.0);
+    if p == [0.0, 0.0] {
+        return;
+    }
+    let step = std::f64::consts::TAU / nd as f64;
+    let angle = p[1].atan2(p[0]).rem_euclid(std::f64::consts::TAU);
+    let j = ((angle / step) as usize).min(nd - 1);
+    let (c0, s0) = dir(j);
+    let (c1, s1) = dir(j + 1);
+    // p = a d_j + b d_j+1.
+    let det = c0 * s1 - s0 * c1;
+    let a = (p[0] * s1 - p[1] * c1) / det;
+    let b = (c0 * p[1] - s0 * p[0]) / det;
+    out[j] = a.max(0.0);
+    out[(j + 1) % nd] += b.max(0.0);
+}
+
+/// Projection onto the second-order cone `||r_T|| <= mu r_N`, `r = [r_N,
+/// r_T1, r_T2]`.
+pub fn project_cone(r: [f64; 3], mu: f64) -> [f64; 3] {
+    let (rn, rt) = (r[0], (r[1] * r[1] + r[2] * r[2]).sqrt());
+    if rt <= mu * rn {
+        r
+    } else if mu * rt <= -rn {
+        [0.0; 3]
+    } else {
+        let a = (mu * rt + rn) / (1.0 + mu * mu);
+        [a, mu * a * r[1] / rt, mu * a * r[2] / rt]
+    }
+}
+
+/// The point of the disc of radius `cap` nearest to `x`.
+pub fn project_disc(x: [f64; 2], cap: f64) -> [f64; 2] {
+    let r = (x[0] * x[0] + x[1] * x[1]).sqrt();
+    if r <= cap.max(0.0) {
+        x
+    } else if cap <= 0.0 {
+        [0.0, 0.0]
+    } else {
+        [x[0] * cap / r, x[1] * cap / r]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn polygon_projection_and_decomposition() {
+        // Square cone (n_d = 4), cap 1: vertices (1,0), (0,1), (-1,0), (0,-1).
+        assert_eq!(project_polygon([0.2, 0.1], 1.0, 4), [0.2, 0.1]);
+        let p = project_polygon([2.0, 0.0], 1.0, 4);
+        assert!((p[0] - 1.0).abs() < 1e-15 && p[1].abs() < 1e-15);
+        let p = project_polygon([1.0, 1.0], 1.0, 4);
+        assert!((p[0] - 0.5).abs() < 1e-15 && (p[1] - 0.5).abs() < 1e-15);
+        assert_eq!(project_polygon([1.0, 1.0], 0.0, 4), [0.0, 0.0]);
+        let mut out = [0.0; 4];
+        decompose([0.5, 0.5], 4, &mut out);
+        assert!((out[0] - 0.5).abs() < 1e-15 && (out[1] - 0.5).abs() < 1e-15 && out[2] == 0.0);
+        decompose([0.0, -0.3], 4, &mut out);
+        assert!((out[3] - 0.3).abs() < 1e-15 && out.iter().sum::<f64>() - 0.3 < 1e-15);
+    }
+
+    #[test]
+    fn the_tables_give_the_bits_of_the_formulas() {
+        let mut poly = Polygon::default();
+        for nd in [3, 4, 5, 8, 16] {
+            poly.set(nd);
+            for k in 0..200 {
+                let a = 0.37 * k as f64;
+                let r = 0.01 * (k % 23) as f64;
+                let x = [r * a.cos(), r * a.sin()];
+                for cap in [0.0, 0.05, 0.1, 0.3] {
+                    assert_eq!(poly.project(x, cap), project_polygon(x, cap, nd));
+                }
+                let (mut u, mut v) = (vec![0.0; nd], vec![0.0; nd]);
+                poly.decompose(x, &mut u);
+                decompose(x, nd, &mut v);
+                assert_eq!(u, v);
+                assert_eq!(poly.tangential(&u), tangential(&u));
+            }
+        }
+    }
+}
