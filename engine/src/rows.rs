@@ -15,15 +15,30 @@ pub struct BodyJac {
     pub ang: Vector3<f64>,
 }
 
+// The two functions below are the inner loop of PGS (a sweep is one
+// `velocity` and one `add_to` per row): inlined, and with one bounds check
+// per body instead of six. Measured: `add_to` was a fifth of a pile's time.
 impl BodyJac {
+    #[inline]
     fn velocity(&self, nu: &[f64]) -> f64 {
-        let k = 6 * self.body;
-        self.lin.x * nu[k]
-            + self.lin.y * nu[k + 1]
-            + self.lin.z * nu[k + 2]
-            + self.ang.x * nu[k + 3]
-            + self.ang.y * nu[k + 4]
-            + self.ang.z * nu[k + 5]
+        let v = &nu[6 * self.body..6 * self.body + 6];
+        self.lin.x * v[0]
+            + self.lin.y * v[1]
+            + self.lin.z * v[2]
+            + self.ang.x * v[3]
+            + self.ang.y * v[4]
+            + self.ang.z * v[5]
+    }
+
+    #[inline]
+    fn add_to(&self, impulse: f64, nu: &mut [f64]) {
+        let v = &mut nu[6 * self.body..6 * self.body + 6];
+        v[0] += self.lin.x * impulse;
+        v[1] += self.lin.y * impulse;
+        v[2] += self.lin.z * impulse;
+        v[3] += self.ang.x * impulse;
+        v[4] += self.ang.y * impulse;
+        v[5] += self.ang.z * impulse;
     }
 }
 
@@ -85,6 +100,7 @@ impl Row {
     }
 
     /// The row's velocity `G_k^T nu`.
+    #[inline]
     pub fn velocity(&self, nu: &[f64]) -> f64 {
         self.a.map_or(0.0, |j| j.velocity(nu)) + self.b.map_or(0.0, |j| j.velocity(nu))
     }
@@ -105,13 +121,13 @@ impl Row {
 
     /// `nu += impulse * self`, for a [`Row::weighted`] row: the bodies'
     /// velocity change from the row's impulse.
+    #[inline]
     pub fn add_to(&self, impulse: f64, nu: &mut [f64]) {
-        for j in [self.a, self.b].into_iter().flatten() {
-            let k = 6 * j.body;
-            for d in 0..3 {
-                nu[k + d] += j.lin[d] * impulse;
-                nu[k + 3 + d] += j.ang[d] * impulse;
-            }
+        if let Some(j) = &self.a {
+            j.add_to(impulse, nu);
+        }
+        if let Some(j) = &self.b {
+            j.add_to(impulse, nu);
         }
     }
 

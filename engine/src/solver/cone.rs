@@ -38,6 +38,7 @@ impl Polygon {
     }
 
     /// [`project_polygon`] from the tables.
+    #[inline]
     pub fn project(&self, x: [f64; 2], cap: f64) -> [f64; 2] {
         project_with(
             x,
