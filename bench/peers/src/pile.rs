@@ -191,6 +191,49 @@ fn curves(rows: &[Row]) -> Vec<(String, Vec<&Row>)> {
     out
 }
 
+/// Each curve's colour and whether its markers are filled: ours in warm
+/// colours by tolerance, Rapier in cool ones by iteration count, a
+/// sleeping run hollow (with 10 colours for 12 curves the palette repeated
+/// and ours could not be told from Rapier's 8 iterations).
+fn styles(curves: &[(String, Vec<&Row>)]) -> Vec<(RGBColor, bool)> {
+    const OURS: [usize; 4] = [3, 1, 6, 5];
+    const RAPIER: [usize; 4] = [0, 2, 4, 9];
+    let mut ours_settings: Vec<String> = Vec::new();
+    curves
+        .iter()
+        .map(|(_, pts)| {
+            let r = pts[0];
+            let sleep = !r.setting.contains("no sleep");
+            let base = r
+                .setting
+                .trim_end_matches(", sleep")
+                .trim_end_matches(", no sleep");
+            let c = if r.engine == "ours" {
+                let k = ours_settings
+                    .iter()
+                    .position(|s| s == base)
+                    .unwrap_or_else(|| {
+                        ours_settings.push(base.to_string());
+                        ours_settings.len() - 1
+                    });
+                color(OURS[k % OURS.len()])
+            } else {
+                let iterations: usize = base
+                    .split_whitespace()
+                    .next()
+                    .and_then(|w| w.parse().ok())
+                    .unwrap_or(0);
+                let k = [1, 4, 8, 16]
+                    .iter()
+                    .position(|&i| i == iterations)
+                    .unwrap_or(3);
+                color(RAPIER[k])
+            };
+            (c, !sleep)
+        })
+        .collect()
+}
+
 /// A log axis' tick label only at 1, 2 and 5 times a power of ten: at
 /// every tick the labels run into each other ("9001000").
 fn sparse(x: f64, label: impl Fn(f64) -> String) -> String {
@@ -227,9 +270,9 @@ const OVERLAP_FLOOR: f64 = 1e-5;
 /// slope in each legend entry) and `pile-work-precision.png` (worst overlap
 /// against mean time per step, each point labelled with its N) in `dir`.
 /// Lines are one pixel wide: wider ones leave the plotting area in
-/// plotters 0.3 (its issue 549). The legends sit in the corner the data
-/// leave empty (cost grows with N; our overlaps are the smallest), so
-/// that no point hides behind them.
+/// plotters 0.3 (its issue 549). The legends sit where the data leave
+/// the plot empty (cost grows with N; between our overlaps and Rapier's),
+/// so that no point hides behind them.
 pub fn figures(
     rows: &[Row],
     dir: &std::path::Path,
@@ -239,6 +282,7 @@ pub fn figures(
     ensure_font().map_err(|e| e.to_string())?;
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let curves = curves(rows);
+    let styles = styles(&curves);
     let time = dir.join("pile-time.png");
     let precision = dir.join("pile-work-precision.png");
     let draw_time = || -> Result<(), Box<dyn std::error::Error>> {
@@ -254,17 +298,23 @@ pub fn figures(
                 |y| sparse(y, |y| format!("{y:.0e}")),
             ),
         )?;
-        for (i, (key, pts)) in curves.iter().enumerate() {
-            let c = color(i);
+        for ((key, pts), &(c, filled)) in curves.iter().zip(&styles) {
+            let marker = if filled {
+                c.filled()
+            } else {
+                c.stroke_width(1)
+            };
             let line: Vec<(f64, f64)> = pts.iter().map(|r| (r.n as f64, mean_ms(r))).collect();
             let fit = slope(&line).map_or("one size".to_string(), |s| format!("slope {s:.2}"));
             chart
                 .draw_series(LineSeries::new(line.clone(), c.stroke_width(1)))?
                 .label(format!("{key} ({fit})"))
                 .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1))
+                    EmptyElement::at((x, y))
+                        + PathElement::new(vec![(0, 0), (20, 0)], c.stroke_width(1))
+                        + Circle::new((10, 0), 4, marker)
                 });
-            chart.draw_series(line.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
+            chart.draw_series(line.iter().map(|&p| Circle::new(p, 4, marker)))?;
         }
         legend(&mut chart, SeriesLabelPosition::LowerRight)?;
         root.present()?;
@@ -288,18 +338,25 @@ pub fn figures(
                 |y| sparse(y, |y| format!("{y:.0e}")),
             ),
         )?;
-        for (i, (key, pts)) in curves.iter().enumerate() {
-            let c = color(i);
+        for ((key, pts), &(c, filled)) in curves.iter().zip(&styles) {
+            let marker = if filled {
+                c.filled()
+            } else {
+                c.stroke_width(1)
+            };
             chart
                 .draw_series(pts.iter().map(|r| {
                     EmptyElement::at((mean_ms(r), overlap(r)))
-                        + Circle::new((0, 0), 5, c.filled())
+                        + Circle::new((0, 0), 5, marker)
                         + Text::new(format!("N={}", r.n), (7, -7), (FONT, 11))
                 }))?
                 .label(key.clone())
-                .legend(move |(x, y)| Circle::new((x + 10, y), 5, c.filled()));
+                .legend(move |(x, y)| Circle::new((x + 10, y), 5, marker));
         }
-        legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
+        // Between our overlaps (below 1 mm) and Rapier's (above 5 mm) the
+        // plot is empty across its width: the legend sits there, on the
+        // right, where no point is hidden behind it.
+        legend(&mut chart, SeriesLabelPosition::MiddleRight)?;
         root.present()?;
         Ok(())
     };

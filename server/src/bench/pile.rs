@@ -134,6 +134,9 @@ pub struct Outcome {
     pub escaped: usize,
     /// Kinetic energy at the end (J).
     pub kinetic: f64,
+    /// The largest body speed at the end (m/s): what keeps a pile's one
+    /// island awake when it is above the sleeping threshold.
+    pub max_speed: f64,
     /// The state's heap bytes per body at the end.
     pub state_bytes_per_body: f64,
     /// Bodies asleep at the end.
@@ -210,6 +213,12 @@ pub fn run(n: usize, settings: &Settings) -> Outcome {
         .filter(|b| b.x.x.abs() > w || b.x.y.abs() > w || b.x.z < 0.0)
         .count();
     out.state_bytes_per_body = e.state().heap_bytes() as f64 / n as f64;
+    out.max_speed = e
+        .state()
+        .bodies
+        .iter()
+        .map(|b| b.v.norm())
+        .fold(0.0, f64::max);
     out
 }
 
@@ -225,12 +234,12 @@ pub fn table(rows: &[Outcome], settings: &Settings) -> String {
     let mut t = format!(
         "Pile of spheres (r = {RADIUS} m, mu = 0.5), h = {dt}, n_d = 4, solver {solver} \
          (PGS: {stop:?} rule at {tol:e} m/s), {sleep}.\n\n\
-         | N | steps | failed | at cap | ms/step (median) | s total | work (median / max) | worst overlap (mm) | escaped | KE end (J) | asleep | state B/body |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|\n"
+         | N | steps | failed | at cap | ms/step (median) | s total | work (median / max) | worst overlap (mm) | escaped | KE end (J) | max speed end (m/s) | asleep | state B/body |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     );
     for o in rows {
         t += &format!(
-            "| {} | {} | {} | {} | {:.3} | {:.2} | {} / {} | {:.3} | {} | {:.2e} | {} | {:.0} |\n",
+            "| {} | {} | {} | {} | {:.3} | {:.2} | {} / {} | {:.3} | {} | {:.2e} | {:.1e} | {} | {:.0} |\n",
             o.n,
             o.steps,
             o.failed,
@@ -242,6 +251,7 @@ pub fn table(rows: &[Outcome], settings: &Settings) -> String {
             o.worst_overlap * 1e3,
             o.escaped,
             o.kinetic,
+            o.max_speed,
             o.asleep,
             o.state_bytes_per_body
         );
