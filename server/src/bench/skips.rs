@@ -214,7 +214,7 @@ pub fn measure(steps: u64) -> Result<Vec<Measured>, String> {
             |p| p.full = true,
         ),
         (
-            "pruning with PGS (no canonical re-solve)",
+            "pruning with PGS (distance rule)",
             "reference, PGS",
             &reference,
             SolverChoice::Pgs,
