@@ -61,14 +61,7 @@ fn matrix_free(p: &model::Params, contacts: &[Contact]) -> bool {
     match p.solver {
         SolverChoice::Pgs => true,
         SolverChoice::Lemke => false,
-        SolverChoice::Auto => {
-            let rows = |c: &Contact| {
-                let friction = c.has_friction() || !p.skips.frictionless_rows;
-                1 + usize::from(friction) * (p.friction_directions + 1)
-            };
-            let n: usize = contacts.iter().filter(|c| c.in_lcp).map(rows).sum();
-            n > AUTO_PGS_SIZE
-        }
+        SolverChoice::Auto => mlcp::lcp_size_of(contacts, p) > AUTO_PGS_SIZE,
     }
 }
 
@@ -724,7 +717,8 @@ impl Engine {
                         Err(e) => return Err(StepError::Lemke(e)),
                     }
                 }
-                // A converged, rigid PGS answer needs no canonical re-solve.
+                // Whether a PGS answer is final without the canonical
+                // re-solve (see the NOTE below).
                 pgs_settled = false;
                 if use_pgs {
                     let solved = iterative::solve(

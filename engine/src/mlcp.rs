@@ -318,6 +318,22 @@ pub enum Assembly {
     Built,
 }
 
+/// Whether contact `c` gets friction rows: where `mu > 0`, or everywhere
+/// with the skip off.
+pub fn has_friction_rows(c: &Contact, p: &Params) -> bool {
+    c.has_friction() || !p.skips.frictionless_rows
+}
+
+/// The size of the pure LCP [`Mlcp::matrix_for`] would make for the
+/// contacts marked `in_lcp`: `nc + nf (n_d + 1)` ([`Mlcp::lcp_size`]).
+pub fn lcp_size_of(contacts: &[Contact], p: &Params) -> usize {
+    contacts
+        .iter()
+        .filter(|c| c.in_lcp)
+        .map(|c| 1 + usize::from(has_friction_rows(c, p)) * (p.friction_directions + 1))
+        .sum()
+}
+
 impl Mlcp {
     /// Contact rows (normal and friction): `m`.
     pub fn contact_rows(&self) -> usize {
@@ -449,7 +465,7 @@ impl Mlcp {
         self.basis.extend_from_slice(&self.rows);
         for i in 0..self.nc {
             let c = &contacts[self.lcp_contacts[i]];
-            if c.has_friction() || !p.skips.frictionless_rows {
+            if has_friction_rows(c, p) {
                 for t in [c.t1, c.t2] {
                     self.basis.push(Row::contact(c, t));
                 }

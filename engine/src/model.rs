@@ -331,10 +331,7 @@ impl Model {
                     crate::solver::PgsParams {
                         velocity_tolerance: d.tolerance,
                         max_iterations: d.max_iterations,
-                        stop: match d.stop {
-                            cosim_shared::PgsStop::Distance => crate::solver::pgs::Stop::Distance,
-                            cosim_shared::PgsStop::Residual => crate::solver::pgs::Stop::Residual,
-                        },
+                        stop: d.stop,
                         ..Default::default()
                     }
                 }),

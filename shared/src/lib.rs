@@ -13,5 +13,6 @@ pub const IMPULSES_HEADER: &str = "step,t,kind,name,body_a,body_b,px,py,pz";
 
 pub use scene::{
     BodyDesc, CameraDesc, FrictionCone, JointDesc, JointKind, PgsDesc, PgsStop, PlaneDesc,
-    PositionUpdate, Scene, SceneError, SimDesc, SolverChoice,
+    PositionUpdate, Scene, SceneError, SimDesc, SolverChoice, DEFAULT_PGS_MAX_ITERATIONS,
+    DEFAULT_PGS_TOLERANCE,
 };

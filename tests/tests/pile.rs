@@ -1,12 +1,10 @@
 //! Piles (issue 14, point 3): the iterative solver converges on a settling
-//! pile with the pile scene's stopping rule (`bench::pile::PGS`: the
+//! pile with the pile scene's stopping rule (`bench::pile::pgs`: the
 //! constraint violation within 1 cm/s), so that the sweep cap stays a
 //! safety net, and the accuracy stays ours: overlaps far below a
 //! millimetre, nothing leaves the box, the pile comes to rest.
 
 use cosim_server::bench::pile::{self, Settings};
-use cosim_server::engine::solver::pgs::Stop;
-use cosim_server::engine::solver::PgsParams;
 
 #[test]
 fn a_pile_settles_with_every_step_converged() {
@@ -14,11 +12,7 @@ fn a_pile_settles_with_every_step_converged() {
         dt: 0.01,
         steps: 500,
         solver: "auto".into(),
-        pgs: PgsParams {
-            stop: Stop::Residual,
-            velocity_tolerance: 1e-2,
-            ..PgsParams::default()
-        },
+        pgs: pile::pgs(1e-2),
         seed: 1,
         trace: 0,
         sleep: false,

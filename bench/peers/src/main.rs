@@ -56,13 +56,8 @@ struct Args {
 
 fn piles(args: &Args) -> ExitCode {
     use cosim_server::bench::pile::Settings;
-    use cosim_server::engine::solver::{pgs::Stop, PgsParams};
-    // The pile scene's own rule (`bench::pile::PGS`) at each tolerance.
-    let rule = |tolerance: f64| PgsParams {
-        stop: Stop::Residual,
-        velocity_tolerance: tolerance,
-        ..PgsParams::default()
-    };
+    // The pile scene's own rule at each tolerance.
+    let rule = cosim_server::bench::pile::pgs;
     let settings = Settings {
         dt: 0.01,
         steps: args.pile_steps,

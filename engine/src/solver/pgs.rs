@@ -30,9 +30,9 @@ use crate::rows::Row;
 /// Default stopping tolerance on the relative residual.
 pub const DEFAULT_TOLERANCE: f64 = 1e-10;
 /// Default iteration (sweep) cap.
-pub const DEFAULT_MAX_ITERATIONS: usize = 5000;
+pub const DEFAULT_MAX_ITERATIONS: usize = cosim_shared::DEFAULT_PGS_MAX_ITERATIONS;
 /// Default physical stopping tolerance (m/s): see [`Pgs::solve`].
-pub const DEFAULT_VELOCITY_TOLERANCE: f64 = 1e-6;
+pub const DEFAULT_VELOCITY_TOLERANCE: f64 = cosim_shared::DEFAULT_PGS_TOLERANCE;
 /// Sweeps between residual evaluations (each costs O(n^2)).
 const CHECK_EVERY: usize = 4;
 
@@ -50,37 +50,9 @@ pub struct PgsParams {
     pub stop: Stop,
 }
 
-/// What `velocity_tolerance` bounds when PGS stops.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Stop {
-    /// The distance to the answer: the last sweep's largest velocity change
-    /// and, while the sweeps shrink, what the rate of shrinking says is
-    /// left ([`within`]). For comparisons with Lemke.
-    #[default]
-    Distance,
-    /// The constraint violation: no update of the last sweep changed a
-    /// velocity by more, so that every contact and joint, when the sweep
-    /// reached it, held to the tolerance (m/s; `h` times it in position
-    /// per step, which the stabilisation then corrects). The rule of the
-    /// engines that step piles (Box2D, Rapier and Bullet stop on a sweep
-    /// count alone); on a pile the distance rule waits for slow modes that
-    /// move the velocities by little (measured: rate 0.998 per sweep on
-    /// the 1,000 pile, thousands of sweeps per step).
-    Residual,
-}
-
-impl std::str::FromStr for Stop {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Stop, String> {
-        match s {
-            "distance" => Ok(Stop::Distance),
-            "residual" => Ok(Stop::Residual),
-            other => Err(format!(
-                "unknown stopping rule {other:?}, expected distance or residual"
-            )),
-        }
-    }
-}
+/// What `velocity_tolerance` bounds when PGS stops (the scene's `[sim.pgs]
+/// stop`).
+pub use cosim_shared::PgsStop as Stop;
 
 impl PgsParams {
     /// The velocity tolerance at which PGS agrees with Lemke to 1e-6 m/s
@@ -282,8 +254,8 @@ pub struct Pgs {
     /// the inertia products: the joint and normal rows, then per friction
     /// block its t1 and t2 rows.
     weighted: Vec<Row>,
-    /// Per friction block: rows along t1 and t2, their weighted rows, and
-    /// the inverse of their 2 x 2 Delassus block.
+    /// Per friction block: rows along t1 and t2 (their weighted rows are
+    /// `weighted`'s) and the inverse of their 2 x 2 Delassus block.
     tangent: Vec<Tangent>,
     /// The iterate: joint and normal impulses, then each friction block's
     /// 2-D tangential impulse `(p_t1, p_t2)`. The `n_d` direction impulses
@@ -302,8 +274,6 @@ pub struct Pgs {
 struct Tangent {
     t1: Row,
     t2: Row,
-    w1: Row,
-    w2: Row,
     inv: [[f64; 2]; 2],
     /// The largest eigenvalue of the 2 x 2 block: turns an impulse change
     /// into the velocity change it makes (m/s) for the stopping rule.
@@ -468,14 +438,7 @@ impl Pgs {
             let scale = 0.5 * (a + d) + (0.25 * (a - d).powi(2) + b * b).sqrt();
             self.weighted.push(w1);
             self.weighted.push(w2);
-            self.tangent.push(Tangent {
-                t1,
-                t2,
-                w1,
-                w2,
-                inv,
-                scale,
-            });
+            self.tangent.push(Tangent { t1, t2, inv, scale });
         }
     }
 
@@ -562,8 +525,8 @@ impl Pgs {
         if delta == [0.0, 0.0] {
             return 0.0;
         }
-        tg.w1.add_to(delta[0], nu);
-        tg.w2.add_to(delta[1], nu);
+        self.weighted[at].add_to(delta[0], nu);
+        self.weighted[at + 1].add_to(delta[1], nu);
         x[at] = new[0];
         x[at + 1] = new[1];
         // Not `hypot`: libm's was 8 % of a pile's sweep time; no overflow here.
@@ -609,8 +572,9 @@ impl Pgs {
     /// reduced LCP at `[p_n; p_f; s]` (`s` the largest sliding speed against
     /// a friction direction), with the joint rows' residual velocities
     /// added in quadrature, relative to `max(||q||, ||joint offsets||)`.
-    /// Also leaves `[p_n; p_f; s]` in `z`.
-    pub fn residual(
+    /// Also writes the iterate on every row of `lambda` and leaves `[p_n;
+    /// p_f; s]` in `z`.
+    fn residual(
         &mut self,
         p: &PgsProblem,
         lambda: &mut [f64],

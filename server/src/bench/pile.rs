@@ -38,7 +38,18 @@ pub fn half_width(n: usize) -> f64 {
 /// back. Measured (`bench pile --n 1000 --steps 150`): 10.9 ms per step
 /// (median), worst overlap 0.063 mm, no step at the cap; the distance
 /// rule at 1e-3 m/s took thousands of sweeps a step once the pile settled.
-pub const PGS: &str = "[sim.pgs]\nstop = \"residual\"\ntolerance = 1e-2\n\n";
+pub const TOLERANCE: f64 = 1e-2;
+
+/// The pile's rule at `tolerance` as the engine takes it ([`TOLERANCE`]
+/// in the pile scene; `bench pile --velocity-tolerance` and the peers
+/// bench's other points).
+pub fn pgs(tolerance: f64) -> PgsParams {
+    PgsParams {
+        stop: cosim_shared::PgsStop::Residual,
+        velocity_tolerance: tolerance,
+        ..PgsParams::default()
+    }
+}
 
 /// The scene text of a pile of `n` spheres, with step `dt` and friction
 /// directions `nd`, solver `solver` (`"pgs"`, `"lemke"`, `"auto"`).
@@ -65,7 +76,7 @@ pub fn text_with(
     if sleep {
         t += "[sim.sleep]\n\n";
     }
-    t += PGS;
+    t += &format!("[sim.pgs]\nstop = \"residual\"\ntolerance = {TOLERANCE:e}\n\n");
     t += &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.5, 0.0);
     for (i, (nx, ny)) in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
         .into_iter()

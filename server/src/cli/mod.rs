@@ -159,8 +159,8 @@ pub enum BenchWhat {
         #[arg(long, default_value_t = 0)]
         trace: u64,
         /// PGS: the stopping rule's tolerance (m/s); the pile scene's own
-        /// (`bench::pile::PGS`) by default.
-        #[arg(long, default_value_t = 1e-2)]
+        /// (`bench::pile::TOLERANCE`) by default.
+        #[arg(long, default_value_t = crate::bench::pile::TOLERANCE)]
         velocity_tolerance: f64,
         /// PGS: sweep cap.
         #[arg(long, default_value_t = crate::engine::solver::pgs::DEFAULT_MAX_ITERATIONS)]
@@ -168,7 +168,7 @@ pub enum BenchWhat {
         /// PGS: what the velocity tolerance bounds, `distance` (to the
         /// answer) or `residual` (the constraint violation).
         #[arg(long, default_value = "residual")]
-        stop: crate::engine::solver::pgs::Stop,
+        stop: cosim_shared::PgsStop,
         /// PGS: plain sweeps, without the NNCG momentum step.
         #[arg(long)]
         no_momentum: bool,
