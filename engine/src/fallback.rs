@@ -25,9 +25,11 @@
 
 use super::applied::InvMass;
 use super::contact::Contact;
+use super::island::Groups;
 use super::mlcp::{Mlcp, Offsets};
 use super::model::Params;
-use super::solver::{Lcp, Lemke, LemkeError, SolveInfo};
+use super::solver::{Lemke, LemkeError, SolveInfo};
+use super::split::Split;
 
 /// The compliances tried by [`Fallback::Compliant`], relative to the LCP
 /// matrix's largest entry, least first (Drake's regularised Lemke climbs a
@@ -81,9 +83,18 @@ impl Fallback {
 #[derive(Debug, Default)]
 pub struct Scratch {
     diagonal: Vec<f64>,
+    /// The LCP by island.
+    split: Split,
     /// The rigid answer and its offsets while the relaxed one is formed.
     z: Vec<f64>,
     offset: Vec<f64>,
+}
+
+impl Scratch {
+    /// Islands of the last solve with LCP unknowns (each solved alone).
+    pub fn islands(&self) -> usize {
+        self.split.islands()
+    }
 }
 
 /// The step's data that the right-hand side is formed from.
@@ -93,6 +104,8 @@ pub struct Step<'a> {
     pub contacts: &'a [Contact],
     pub params: &'a Params,
     pub minv: &'a [InvMass],
+    /// The rows by island: each is solved on its own.
+    pub groups: &'a Groups,
 }
 
 /// What the ladder gave.
@@ -139,26 +152,18 @@ pub fn explained(relaxed_gain: f64, work: f64, allowance: f64) -> f64 {
     relaxed_gain.max(0.0) + BUDGET_FACTOR * work + allowance
 }
 
-/// Lemke on the LCP `m` holds, into `m.z`.
-fn lemke_on(lemke: &mut Lemke, m: &mut Mlcp) -> Result<SolveInfo, LemkeError> {
-    let lcp = Lcp {
-        n: m.lcp_size(),
-        m: &m.lcp_m,
-        q: &m.lcp_q,
-    };
-    lemke.solve(&lcp, &mut m.z)
-}
-
 /// Solves the step's LCP (right-hand side already formed with
-/// [`Offsets::Full`], or `guessed` already solved from the last support)
-/// into `m.z` and recovers `nu'` into `nu`, climbing the ladder of the
-/// module notes. On a fallback, `m`'s right-hand side is left as the
+/// [`Offsets::Full`]) island by island (`split.rs`) into `m.z`, the rigid
+/// problem first from `guess` (the last step's support by contact
+/// identity, where there is one), and recovers `nu'` into `nu`, climbing
+/// the ladder of the module notes. The energy check and the ladder are
+/// the whole step's. On a fallback, `m`'s right-hand side is left as the
 /// answer's. The error is the rigid problem's, returned only when every
 /// rung failed; then `m` holds the rigid problem again.
 pub fn solve(
     lemke: &mut Lemke,
     m: &mut Mlcp,
-    guessed: Option<SolveInfo>,
+    guess: Option<&[bool]>,
     step: Step,
     nu: &mut Vec<f64>,
     scratch: &mut Scratch,
@@ -169,10 +174,9 @@ pub fn solve(
         params: p,
         ..
     } = step;
-    let rigid = match guessed {
-        Some(info) => Ok(info),
-        None => lemke_on(lemke, m),
-    };
+    let split = &mut scratch.split;
+    split.index(m, step.groups);
+    let rigid = split.lemke(lemke, m, guess);
     let mut energy_refused = false;
     if !p.fallback {
         // Rigid only: the answer as it is, or the failure.
@@ -204,7 +208,7 @@ pub fn solve(
             scratch.offset.clear();
             scratch.offset.extend_from_slice(&m.offset);
             m.rhs(nu_free, contacts, p, Offsets::Relaxed);
-            if let Ok(relaxed) = lemke_on(lemke, m) {
+            if let Ok(relaxed) = scratch.split.lemke(lemke, m, None) {
                 m.recover(nu_free, nu);
                 let relaxed_gain = m.kinetic_change(nu_free, nu);
                 let bound = explained(relaxed_gain, m.offset_work(&scratch.offset), allowance);
@@ -238,7 +242,7 @@ pub fn solve(
         Err(e) => e,
     };
     m.rhs(nu_free, contacts, p, Offsets::Relaxed);
-    if let Ok(info) = lemke_on(lemke, m) {
+    if let Ok(info) = scratch.split.lemke(lemke, m, None) {
         m.recover(nu_free, nu);
         return Ok(Solved {
             info,
@@ -256,7 +260,7 @@ pub fn solve(
         for i in 0..n {
             m.lcp_m[i * n + i] = scratch.diagonal[i] + eps;
         }
-        let solved = lemke_on(lemke, m);
+        let solved = scratch.split.lemke(lemke, m, None);
         for i in 0..n {
             m.lcp_m[i * n + i] = scratch.diagonal[i];
         }

@@ -5,14 +5,47 @@
 //!
 //! The step reports how many islands it had and the bodies of the largest
 //! (`StepReport::islands`, `largest_island`); a body that no constraint
-//! touches (in flight) is in none. Solving each island on its own, with
-//! Lemke for the small ones and the iterative solver for the large, builds
-//! on this partition.
+//! touches (in flight) is in none. [`Islands::group`] sorts the step's
+//! rows by island ([`Groups`]), and the solve stage solves each island on
+//! its own (`split.rs`): their problems share no body, so the step's LCP
+//! is block-diagonal by island and the islands' answers together are the
+//! whole problem's.
 //!
 //! Union-find with path halving and union by size: O(N + C) per step, no
 //! allocation once the buffers have seen the largest scene.
 
 use crate::collision::Counterpart;
+use crate::rows::Row;
+
+/// The step's joint and normal rows sorted by island (compressed rows):
+/// island `g`'s rows are [`Groups::rows_of`]`(g)`, ascending, so that a
+/// solver visits them in the whole problem's order. Islands are numbered
+/// by their first row.
+#[derive(Debug, Default, Clone)]
+pub struct Groups {
+    start: Vec<u32>,
+    rows: Vec<u32>,
+    /// Per row, its island (scratch of [`Islands::group`]).
+    of_row: Vec<u32>,
+    /// Per union-find root, its island (`u32::MAX`: none yet).
+    of_root: Vec<u32>,
+}
+
+impl Groups {
+    /// Islands (0 when there are no rows).
+    pub fn len(&self) -> usize {
+        self.start.len().saturating_sub(1)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The rows of island `g` (indices into the problem's rows).
+    pub fn rows_of(&self, g: usize) -> &[u32] {
+        &self.rows[self.start[g] as usize..self.start[g + 1] as usize]
+    }
+}
 
 /// The partition's scratch space and its last result.
 #[derive(Debug, Default, Clone)]
@@ -33,6 +66,16 @@ pub struct Summary {
 }
 
 impl Islands {
+    /// Every body its own root, untied.
+    fn reset(&mut self, bodies: usize) {
+        self.parent.clear();
+        self.parent.extend(0..bodies as u32);
+        self.size.clear();
+        self.size.resize(bodies, 1);
+        self.tied.clear();
+        self.tied.resize(bodies, false);
+    }
+
     fn root(&mut self, mut i: usize) -> usize {
         while self.parent[i] as usize != i {
             let up = self.parent[self.parent[i] as usize];
@@ -62,12 +105,7 @@ impl Islands {
         bodies: usize,
         links: impl Iterator<Item = (usize, Counterpart)>,
     ) -> Summary {
-        self.parent.clear();
-        self.parent.extend(0..bodies as u32);
-        self.size.clear();
-        self.size.resize(bodies, 1);
-        self.tied.clear();
-        self.tied.resize(bodies, false);
+        self.reset(bodies);
         for (a, b) in links {
             self.tied[a] = true;
             if let Counterpart::Body(j) = b {
@@ -83,6 +121,68 @@ impl Islands {
             }
         }
         out
+    }
+
+    /// Sorts `rows` (the joint and normal rows of the step's problem) by
+    /// island into `out`: two rows are in one island when a chain of rows
+    /// links their bodies. A row on no body (a joint of the world to
+    /// itself) is an island of its own. Leaves the union-find as
+    /// [`Islands::partition`] would for the same links.
+    pub fn group(&mut self, bodies: usize, rows: &[Row], out: &mut Groups) {
+        self.reset(bodies);
+        for row in rows {
+            let (a, b) = (row.a.map(|j| j.body), row.b.map(|j| j.body));
+            for i in [a, b].into_iter().flatten() {
+                self.tied[i] = true;
+            }
+            if let (Some(a), Some(b)) = (a, b) {
+                self.union(a, b);
+            }
+        }
+        out.of_root.clear();
+        out.of_root.resize(bodies, u32::MAX);
+        out.of_row.clear();
+        out.start.clear();
+        let mut islands = 0u32;
+        for row in rows {
+            let g = match row.a.or(row.b) {
+                Some(j) => {
+                    let r = self.root(j.body);
+                    if out.of_root[r] == u32::MAX {
+                        out.of_root[r] = islands;
+                        islands += 1;
+                    }
+                    out.of_root[r]
+                }
+                None => {
+                    islands += 1;
+                    islands - 1
+                }
+            };
+            out.of_row.push(g);
+        }
+        // Counting sort: sizes, then starts, then the rows in order.
+        out.start.resize(islands as usize + 1, 0);
+        for &g in &out.of_row {
+            out.start[g as usize + 1] += 1;
+        }
+        for g in 0..islands as usize {
+            out.start[g + 1] += out.start[g];
+        }
+        out.rows.clear();
+        out.rows.resize(rows.len(), 0);
+        for (k, &g) in out.of_row.iter().enumerate() {
+            let slot = out.start[g as usize] as usize;
+            out.rows[slot] = k as u32;
+            out.start[g as usize] += 1;
+        }
+        // The starts moved to the ends: shift them back.
+        for g in (1..=islands as usize).rev() {
+            out.start[g] = out.start[g - 1];
+        }
+        if let Some(first) = out.start.first_mut() {
+            *first = 0;
+        }
     }
 
     /// Keeps, for each island of the last partition (a body in none is an
@@ -133,6 +233,28 @@ mod tests {
             }
         );
         assert_eq!(islands.partition(7, std::iter::empty()), Summary::default());
+        // Rows: a joint 1-2, a contact 3-plane, a contact 2-3, a contact
+        // 0-plane, a row on no body: islands {1, 2, 3} (rows 0, 1, 2),
+        // {0} (row 3), the bodiless row 4; numbered by their first row.
+        use crate::rows::Row;
+        use nalgebra::Vector3;
+        let on = |i: usize| Some((i, Vector3::zeros()));
+        let x = Vector3::x();
+        let rows = [
+            Row::along(x, on(1), on(2)),
+            Row::along(x, on(3), None),
+            Row::along(x, on(2), on(3)),
+            Row::along(x, on(0), None),
+            Row::along(x, None, None),
+        ];
+        let mut groups = Groups::default();
+        islands.group(4, &rows, &mut groups);
+        assert_eq!(groups.len(), 3);
+        assert_eq!(groups.rows_of(0), [0, 1, 2]);
+        assert_eq!(groups.rows_of(1), [3]);
+        assert_eq!(groups.rows_of(2), [4]);
+        islands.group(4, &[], &mut groups);
+        assert!(groups.is_empty());
         // Everything on one floor: still one island each.
         let s = islands.partition(3, (0..3).map(|i| (i, Plane(0))));
         assert_eq!(

@@ -28,7 +28,9 @@
 
 use super::fallback::{allowance, explained, Fallback, Step};
 use super::mlcp::{Mlcp, Offsets};
+use super::solver::Lemke;
 use super::solver::{pgs, Lcp, Pgs, PgsInfo, PgsParams, PgsProblem};
+use super::split::{self, Split};
 use super::state::State;
 use cosim_shared::FrictionCone;
 
@@ -42,6 +44,39 @@ pub struct Scratch {
     lambda: Vec<f64>,
     nu: Vec<f64>,
     z: Vec<f64>,
+    /// The islands: which go to Lemke, which to PGS.
+    split: Split,
+    /// What Lemke did on its islands over the step's runs (the islands of
+    /// the last run).
+    done: split::Exact,
+}
+
+impl Scratch {
+    /// The islands Lemke solved in the last solve's last run, and the
+    /// pivots, highest rung and refinement over its runs.
+    pub fn exact(&self) -> split::Exact {
+        self.done
+    }
+
+    /// The islands PGS iterated in the last solve's last run.
+    pub fn iterated(&self) -> usize {
+        self.split.rest.len()
+    }
+}
+
+/// The solvers of the stage: PGS with its parameters, and, with `exact`,
+/// Lemke for the small islands.
+pub struct Solvers<'a> {
+    pub pgs: &'a mut Pgs,
+    pub params: &'a PgsParams,
+    pub exact: Option<Exact<'a>>,
+}
+
+/// Lemke for the small islands (`split.rs`): the solver and the last
+/// step's support by contact identity, where there is one.
+pub struct Exact<'a> {
+    pub lemke: &'a mut Lemke,
+    pub guess: Option<&'a [bool]>,
 }
 
 /// What the iterative solve gave.
@@ -56,23 +91,27 @@ pub struct Solved {
 }
 
 /// Solves the step's mixed problem (right-hand side formed with
-/// [`Offsets::Full`]) with PGS into `m.lambda`, `m.z`, `m.p_b` and `nu`.
+/// [`Offsets::Full`]) with PGS into `m.lambda`, `m.z`, `m.p_b` and `nu`,
+/// island by island; with `exact`, the small islands without joints by
+/// Lemke (`split.rs`) in every run.
 pub fn solve(
-    solver: &mut Pgs,
-    params: &PgsParams,
+    solvers: &mut Solvers,
     m: &mut Mlcp,
     state: &State,
     step: Step,
     nu: &mut Vec<f64>,
     scratch: &mut Scratch,
 ) -> Solved {
-    let p = step.params;
     m.add_friction_rows(step.contacts);
+    scratch.split.index(m, step.groups);
+    scratch.done = split::Exact::default();
+    let p = step.params;
     warm_start(m, state, step);
     scratch.warm.clone_from(&m.lambda);
     scratch.full_offset.clear();
     scratch.full_offset.extend_from_slice(&m.offset);
-    let rigid = run(solver, params, m, &scratch.full_offset, step, nu);
+    let islands = (&mut scratch.split, &mut scratch.done);
+    let rigid = run(solvers, m, &scratch.full_offset, step, nu, islands);
     set_joint_impulses(m);
     if !p.fallback {
         return Solved {
@@ -109,7 +148,8 @@ pub fn solve(
     scratch.offset.extend_from_slice(&m.offset);
     scratch.offset[..m.nb].fill(0.0);
     m.lambda.clone_from(&scratch.warm);
-    let relaxed = run(solver, params, m, &scratch.offset, step, nu);
+    let islands = (&mut scratch.split, &mut scratch.done);
+    let relaxed = run(solvers, m, &scratch.offset, step, nu, islands);
     set_joint_impulses(m);
     let iterations = rigid.iterations + relaxed.iterations;
     // The rigid answer stands when the relaxed impulses explain its gain
@@ -142,7 +182,8 @@ pub fn solve(
     }
     // From zero impulses: a descent of the kinetic energy at every update.
     m.lambda.fill(0.0);
-    let cold = run(solver, params, m, &scratch.offset, step, nu);
+    let islands = (&mut scratch.split, &mut scratch.done);
+    let cold = run(solvers, m, &scratch.offset, step, nu, islands);
     set_joint_impulses(m);
     Solved {
         info: PgsInfo {
@@ -198,15 +239,29 @@ fn warm_start(m: &mut Mlcp, state: &State, step: Step) {
     }
 }
 
-/// One PGS run on `m`'s rows with the row offsets `offset`.
+/// One run on `m`'s rows with the row offsets `offset`: Lemke's islands
+/// first (their impulses then stand in the warm start), then PGS on the
+/// rest.
 fn run(
-    solver: &mut Pgs,
-    params: &PgsParams,
+    solvers: &mut Solvers,
     m: &mut Mlcp,
     offset: &[f64],
     step: Step,
     nu: &mut Vec<f64>,
+    (split, done): (&mut Split, &mut split::Exact),
 ) -> PgsInfo {
+    match solvers.exact.as_mut() {
+        Some(exact) => {
+            let now = split.exact_islands(exact.lemke, m, step.minv, exact.guess);
+            *done = split::Exact {
+                pivots: done.pivots + now.pivots,
+                rung: done.rung.max_by_ladder(now.rung),
+                refined: done.refined | now.refined,
+                islands: now.islands,
+            };
+        }
+        None => split.all_iterative(),
+    }
     let problem = PgsProblem {
         rows: &m.rows,
         offset,
@@ -224,6 +279,10 @@ fn run(
             q: &m.lcp_q,
         },
         circular: step.params.friction_cone == FrictionCone::Circular,
+        groups: step.groups,
+        iterate: &split.rest,
     };
-    solver.solve(&problem, params, &mut m.lambda, nu, &mut m.z)
+    solvers
+        .pgs
+        .solve(&problem, solvers.params, &mut m.lambda, nu, &mut m.z)
 }

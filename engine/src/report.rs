@@ -117,6 +117,12 @@ pub struct StepReport {
     /// step.
     pub islands: usize,
     pub largest_island: usize,
+    /// Islands of the final solve that Lemke solved and that PGS iterated
+    /// (each island is solved on its own, `split.rs`; with `auto` on a
+    /// large step, Lemke takes the small ones). An island of joints alone
+    /// in flight has no LCP: Lemke's count leaves it out.
+    pub lemke_islands: usize,
+    pub pgs_islands: usize,
     /// Bodies asleep after the step (`sleep.rs`).
     pub sleeping: usize,
     /// Left-out contacts that the velocity check added back (re-solves).

@@ -127,3 +127,32 @@ fn sleeping_and_waking_allocate_nothing_after_warm_up() {
     let (made, _) = second_pass_allocations(model, 1500);
     assert_eq!(made, 0, "{made} allocations in 1500 steps after warm-up");
 }
+
+/// The same on a pile (issue 14, points 2 and 5): 100 spheres dropped into
+/// a box with `auto`, whose steps split by island between Lemke (small
+/// islands, blocks built from their rows) and PGS (the pile); the second
+/// pass over the same 300 steps allocates nothing.
+#[test]
+fn a_pile_split_between_lemke_and_pgs_allocates_nothing_after_warm_up() {
+    use cosim_server::bench::pile;
+    let scene = pile::scene(100, 0.01, 4, "auto", 300, 1);
+    let mut model = Model::from_scene(&scene);
+    model.params.pgs = pile::pgs(pile::TOLERANCE);
+    let mut engine = Engine::new(model);
+    let initial = engine.state().clone();
+    let mut split = 0;
+    for _ in 0..300 {
+        let r = engine.step();
+        assert!(r.ok(), "{r:?}");
+        split += usize::from(r.lemke_islands > 0 && r.pgs_islands > 0);
+    }
+    // Measured: 18 steps (the falling phase and the pile's edge).
+    assert!(split > 10, "{split} steps split between the solvers");
+    engine.set_state(initial);
+    let before = allocations();
+    for _ in 0..300 {
+        assert!(engine.step().ok());
+    }
+    let made = allocations() - before;
+    assert_eq!(made, 0, "{made} allocations in 300 steps after warm-up");
+}

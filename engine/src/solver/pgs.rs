@@ -20,11 +20,12 @@
 //! Matrix-free: the velocities are kept up to date (`nu = nu_free + M^-1 G
 //! lambda`), so a row costs O(1) and no Delassus matrix is needed.
 
-use super::cone::{decompose, tangential, Polygon};
+use super::cone::{decompose, Polygon};
 pub use super::cone::{project_cone, project_disc, project_polygon};
 use super::Lcp;
 use crate::applied::InvMass;
 use crate::contact::direction_coefficients as direction;
+use crate::island::Groups;
 use crate::rows::Row;
 
 /// Default stopping tolerance on the relative residual.
@@ -102,6 +103,12 @@ pub struct PgsProblem<'a> {
     pub lcp: Lcp<'a>,
     /// The isotropic cone `|p_t| <= mu p_n` instead of the polyhedral one.
     pub circular: bool,
+    /// The joint and normal rows by island: each island is iterated to its
+    /// own stop.
+    pub groups: &'a Groups,
+    /// The islands to iterate (the others are solved already: their
+    /// impulses are part of the warm start and stay).
+    pub iterate: &'a [u32],
 }
 
 /// How the iteration ended.
@@ -112,36 +119,6 @@ pub struct PgsInfo {
     pub residual: f64,
     /// Whether the tolerance stopped it (else the iteration cap).
     pub converged: bool,
-}
-
-/// The absolute natural-map residual `||z - max(0, z - w)||` of the reduced
-/// LCP at `z = [p_n; p_f; s]`, with `w` computed matrix-free from the
-/// velocities `nu` (which carry the joints' response): normal rows
-/// `G_n^T nu + a_n`, friction rows `G_f^T nu + E s`, slack rows
-/// `mu p_n - E^T p_f`. It equals Lemke's measure when the joint rows are
-/// solved exactly.
-fn natural_map(p: &PgsProblem, z: &[f64], nu: &[f64]) -> f64 {
-    let m = p.rows.len() - p.nb;
-    let term = |zi: f64, wi: f64| {
-        let r = zi - (zi - wi).max(0.0);
-        r * r
-    };
-    let mut sum = 0.0;
-    for (i, &pn) in z[..p.nc].iter().enumerate() {
-        let k = p.nb + i;
-        sum += term(pn, p.rows[k].velocity(nu) + p.offset[k] + p.cfm[k] * pn);
-    }
-    for (f, &i) in p.friction_of.iter().enumerate() {
-        let s = z[m + f];
-        let mut total = 0.0;
-        for j in 0..p.nd {
-            let row = p.nc + f * p.nd + j;
-            total += z[row];
-            sum += term(z[row], p.rows[p.nb + row].velocity(nu) + s);
-        }
-        sum += term(s, p.mu[f] * z[i] - total);
-    }
-    sum.sqrt()
 }
 
 /// A warm start for one friction block: the tangential impulse `pt` (in
@@ -268,6 +245,12 @@ pub struct Pgs {
     /// The friction block of each normal row, if it has one.
     block_of: Vec<Option<usize>>,
     polygon: Polygon,
+    /// Per island, the coordinates of `x` it owns: `coords[coord_start[g]
+    /// ..coord_start[g + 1]]` (its rows, each normal row's block after it).
+    coords: Vec<u32>,
+    coord_start: Vec<u32>,
+    /// Scratch of the residual: a block's direction impulses.
+    dirs: Vec<f64>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -284,6 +267,13 @@ impl Pgs {
     /// Iterates from the warm start in `lambda` (all rows); leaves the
     /// impulses in `lambda`, the velocities in `nu` and the LCP unknowns
     /// `[p_n; p_f; s]` in `z`.
+    ///
+    /// Island by island (`PgsProblem::iterate`): two islands share no
+    /// body, so each is iterated alone to its own stop, with its own
+    /// momentum, and a settled island is not swept again while another
+    /// settles; the islands not listed keep their impulses (Lemke's, see
+    /// `split.rs`). `PgsInfo::iterations` is the largest island's sweeps;
+    /// `converged` holds when every island stopped on its tolerance.
     ///
     /// Each iteration is one sweep followed by a nonsmooth nonlinear
     /// conjugate gradient step (NNCG, Silcowitz, Niebe and Erleben 2010):
@@ -325,22 +315,48 @@ impl Pgs {
                 w.add_to(x, nu);
             }
         }
-        let mut info = PgsInfo {
-            iterations: 0,
-            residual: f64::INFINITY,
-            converged: false,
-        };
         let n = self.x.len();
         self.direction.clear();
         self.direction.resize(n, 0.0);
+        self.before.clear();
+        self.before.resize(n, 0.0);
+        let mut info = PgsInfo {
+            iterations: 0,
+            residual: f64::INFINITY,
+            converged: true,
+        };
+        for &g in p.iterate {
+            let (iterations, converged) = self.iterate(p, params, g as usize, nu);
+            info.iterations = info.iterations.max(iterations);
+            info.converged &= converged;
+        }
+        info.residual = self.residual(p, lambda, nu, z);
+        info
+    }
+
+    /// Island `g` iterated to its stop (see [`Pgs::solve`]): its sweeps,
+    /// and whether a tolerance stopped it (else the cap).
+    fn iterate(
+        &mut self,
+        p: &PgsProblem,
+        params: &PgsParams,
+        g: usize,
+        nu: &mut [f64],
+    ) -> (usize, bool) {
         let mut last_g2 = 0.0;
         let mut recent = [f64::INFINITY; RATE_WINDOW + 1];
-        for it in 1..=params.max_iterations.max(1) {
+        let cap = params.max_iterations.max(1);
+        for it in 1..=cap {
             if params.momentum {
-                self.before.clear();
-                self.before.extend_from_slice(&self.x);
+                let (lo, hi) = (
+                    self.coord_start[g] as usize,
+                    self.coord_start[g + 1] as usize,
+                );
+                for &c in &self.coords[lo..hi] {
+                    self.before[c as usize] = self.x[c as usize];
+                }
             }
-            let correction = self.sweep(p, params.relaxation, nu);
+            let correction = self.sweep(p, g, params.relaxation, nu);
             recent.rotate_right(1);
             recent[0] = correction;
             let done = match params.stop {
@@ -350,29 +366,22 @@ impl Pgs {
                 Stop::Residual => correction <= params.velocity_tolerance,
             };
             if done {
-                info.iterations = it;
-                info.residual = self.residual(p, lambda, nu, z);
-                info.converged = true;
-                return info;
+                return (it, true);
             }
             if params.momentum {
-                last_g2 = self.momentum(last_g2, nu);
+                last_g2 = self.momentum(g, last_g2, nu);
             }
             // The relative residual as a second exit of the distance rule
-            // (a pass over the rows: not with the residual rule, whose few
-            // sweeps on a pile it would slow by a tenth).
-            if params.stop == Stop::Distance && it % CHECK_EVERY == 0 {
-                info.iterations = it;
-                info.residual = self.residual(p, lambda, nu, z);
-                if info.residual <= params.tolerance {
-                    info.converged = true;
-                    return info;
-                }
+            // (a pass over the island's rows: not with the residual rule,
+            // whose few sweeps on a pile it would slow by a tenth).
+            if params.stop == Stop::Distance
+                && it % CHECK_EVERY == 0
+                && self.residual_of(p, p.groups.rows_of(g), nu).relative() <= params.tolerance
+            {
+                return (it, true);
             }
         }
-        info.iterations = params.max_iterations.max(1);
-        info.residual = self.residual(p, lambda, nu, z);
-        info
+        (cap, false)
     }
 
     /// The iterate `x` from the impulses `lambda` of every row.
@@ -420,6 +429,22 @@ impl Pgs {
         for (f, &i) in p.friction_of.iter().enumerate() {
             self.block_of[i] = Some(f);
         }
+        self.coords.clear();
+        self.coord_start.clear();
+        self.coord_start.push(0);
+        for g in 0..p.groups.len() {
+            for &k in p.groups.rows_of(g) {
+                self.coords.push(k);
+                if let Some(f) = (k as usize)
+                    .checked_sub(p.nb)
+                    .and_then(|i| self.block_of[i])
+                {
+                    let at = (rows + 2 * f) as u32;
+                    self.coords.extend([at, at + 1]);
+                }
+            }
+            self.coord_start.push(self.coords.len() as u32);
+        }
         self.tangent.clear();
         for f in 0..p.friction_of.len() {
             let base = p.nb + p.nc + f * p.nd;
@@ -442,21 +467,23 @@ impl Pgs {
         }
     }
 
-    /// One Gauss-Seidel sweep: the joint rows, then each contact's normal
-    /// row followed at once by its friction block, so that the block's cone
+    /// One Gauss-Seidel sweep of island `g`: its joint rows, then each
+    /// contact's normal row followed at once by its friction block, so that the block's cone
     /// is the one its normal impulse just set. Returns the largest velocity
     /// change an update made (m/s). Measured on the 100-sphere pile (300
     /// steps, 1e-5 m/s): all normal rows before all friction blocks, 172 ms
     /// per step (median) and 67 steps at the cap; this order, 57 ms and 30;
     /// every other sweep in reverse (symmetric Gauss-Seidel), 133 ms and 46.
-    fn sweep(&mut self, p: &PgsProblem, omega: f64, nu: &mut [f64]) -> f64 {
+    fn sweep(&mut self, p: &PgsProblem, g: usize, omega: f64, nu: &mut [f64]) -> f64 {
         let mut x = std::mem::take(&mut self.x);
         let mut largest = 0.0f64;
-        for k in 0..p.nb {
-            largest = largest.max(self.update_row(p, k, omega, false, &mut x, nu));
-        }
-        for i in 0..p.nc {
-            largest = largest.max(self.update_row(p, p.nb + i, omega, true, &mut x, nu));
+        for &k in p.groups.rows_of(g) {
+            let k = k as usize;
+            let Some(i) = k.checked_sub(p.nb) else {
+                largest = largest.max(self.update_row(p, k, omega, false, &mut x, nu));
+                continue;
+            };
+            largest = largest.max(self.update_row(p, k, omega, true, &mut x, nu));
             if let Some(f) = self.block_of[i] {
                 largest = largest.max(self.update_block(p, f, i, omega, &mut x, nu));
             }
@@ -533,36 +560,34 @@ impl Pgs {
         tg.scale * (delta[0] * delta[0] + delta[1] * delta[1]).sqrt()
     }
 
-    /// The NNCG step after a sweep (see [`Pgs::solve`]): moves `lambda`
-    /// (and `nu` with it) along the momentum direction. Takes and returns
+    /// The NNCG step after a sweep of island `g` (see [`Pgs::solve`]):
+    /// moves its impulses (and `nu` with them) along the momentum direction. Takes and returns
     /// `|g|^2` of the last sweep.
-    fn momentum(&mut self, last_g2: f64, nu: &mut [f64]) -> f64 {
-        let g2: f64 = self
-            .x
+    fn momentum(&mut self, g: usize, last_g2: f64, nu: &mut [f64]) -> f64 {
+        let coords = &self.coords[self.coord_start[g] as usize..self.coord_start[g + 1] as usize];
+        let g2: f64 = coords
             .iter()
-            .zip(&self.before)
-            .map(|(x, y)| (x - y) * (x - y))
+            .map(|&c| {
+                let d = self.x[c as usize] - self.before[c as usize];
+                d * d
+            })
             .sum();
         let beta = if last_g2 > 0.0 { g2 / last_g2 } else { 0.0 };
         if beta > RESTART_BETA || beta == 0.0 {
             // Restart: the direction is the sweep's change alone.
-            for ((d, x), y) in self.direction.iter_mut().zip(&self.x).zip(&self.before) {
-                *d = x - y;
+            for &c in coords {
+                let c = c as usize;
+                self.direction[c] = self.x[c] - self.before[c];
             }
             return g2;
         }
-        for (k, ((d, x), y)) in self
-            .direction
-            .iter_mut()
-            .zip(self.x.iter_mut())
-            .zip(&self.before)
-            .enumerate()
-        {
-            let step = beta.min(1.0) * *d;
-            *d = step + (*x - *y);
+        for &c in coords {
+            let c = c as usize;
+            let step = beta.min(1.0) * self.direction[c];
+            self.direction[c] = step + (self.x[c] - self.before[c]);
             if step != 0.0 {
-                *x += step;
-                self.weighted[k].add_to(step, nu);
+                self.x[c] += step;
+                self.weighted[c].add_to(step, nu);
             }
         }
         g2
@@ -582,7 +607,6 @@ impl Pgs {
         z: &mut Vec<f64>,
     ) -> f64 {
         self.scatter(p, lambda);
-        let lambda = &*lambda;
         let m = p.rows.len() - p.nb;
         z.clear();
         z.extend_from_slice(&lambda[p.nb..]);
@@ -594,66 +618,112 @@ impl Pgs {
             z.push(s);
         }
         debug_assert_eq!(z.len(), m + p.friction_of.len());
-        let qn = p.lcp.q.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let lcp_abs = if p.circular {
-            self.coulomb_residual(p, lambda, nu)
-        } else {
-            natural_map(p, z, nu)
+        let mut all = Parts::default();
+        for g in 0..p.groups.len() {
+            let part = self.residual_of(p, p.groups.rows_of(g), nu);
+            all.abs2 += part.abs2;
+            all.q2 += part.q2;
+            all.joint2 += part.joint2;
+        }
+        all.relative()
+    }
+
+    /// The residual's parts over `rows` (an island's joint and normal
+    /// rows), from the iterate `x` and the velocities `nu`:
+    ///
+    /// - a joint row: its residual velocity `G_k^T nu + offset_k + cfm_k
+    ///   lambda_k`, and for the scale the same at `nu_free` without the
+    ///   impulse;
+    /// - a normal row and its friction block, polyhedral cone: the natural
+    ///   map `z - max(0, z - w)` of the reduced LCP's rows (normal
+    ///   `G_n^T nu + a_n`, friction `G_f^T nu + E s`, slack
+    ///   `mu p_n - E^T p_f`, with `s` the largest sliding speed against a
+    ///   direction, `max(0, max_j -v_j)`): Lemke's measure when the joint
+    ///   rows are solved exactly;
+    /// - circular cone: the natural-map Coulomb residual with De Saxce's
+    ///   change of variable (as for the corpus' 3-D problems),
+    ///   `r - proj_K(r - (u + mu |u_T| e_N))`, `r = [p_n, p_t]`,
+    ///   `u = [v_n + a_n, v_t]`;
+    ///
+    /// and the squares of the LCP's `q` over the rows' unknowns.
+    fn residual_of(&mut self, p: &PgsProblem, rows: &[u32], nu: &[f64]) -> Parts {
+        let term = |zi: f64, wi: f64| {
+            let r = zi - (zi - wi).max(0.0);
+            r * r
         };
-        let joint_abs2: f64 = (0..p.nb)
-            .map(|k| {
-                let v = p.rows[k].velocity(nu) + p.offset[k] + p.cfm[k] * lambda[k];
-                v * v
-            })
-            .sum();
-        let joint_scale = (0..p.nb)
-            .map(|k| {
-                let v = p.rows[k].velocity(p.nu_free) + p.offset[k];
-                v * v
-            })
-            .sum::<f64>()
-            .sqrt();
-        let abs = (lcp_abs * lcp_abs + joint_abs2).sqrt();
-        let scale = qn.max(joint_scale);
+        let nd = p.nd;
+        let m = p.nc + p.friction_of.len() * nd;
+        let mut out = Parts::default();
+        let mut dirs = std::mem::take(&mut self.dirs);
+        dirs.resize(nd, 0.0);
+        let x = &self.x;
+        for &k in rows {
+            let k = k as usize;
+            let Some(i) = k.checked_sub(p.nb) else {
+                let v = p.rows[k].velocity(nu) + p.offset[k] + p.cfm[k] * x[k];
+                let free = p.rows[k].velocity(p.nu_free) + p.offset[k];
+                out.abs2 += v * v;
+                out.joint2 += free * free;
+                continue;
+            };
+            let pn = x[k];
+            let un = p.rows[k].velocity(nu) + p.offset[k] + p.cfm[k] * pn;
+            out.q2 += p.lcp.q[i] * p.lcp.q[i];
+            let Some(f) = self.block_of[i] else {
+                out.abs2 += term(pn, un);
+                continue;
+            };
+            let at = p.nb + p.nc + 2 * f;
+            let pt = [x[at], x[at + 1]];
+            let base = p.nc + f * nd;
+            out.q2 += p.lcp.q[base..base + nd].iter().map(|q| q * q).sum::<f64>()
+                + p.lcp.q[m + f] * p.lcp.q[m + f];
+            let mu = p.mu[f];
+            if p.circular {
+                let tg = &self.tangent[f];
+                let ut = [tg.t1.velocity(nu), tg.t2.velocity(nu)];
+                let un_hat = un + mu * (ut[0] * ut[0] + ut[1] * ut[1]).sqrt();
+                let y = project_cone([pn - un_hat, pt[0] - ut[0], pt[1] - ut[1]], mu);
+                out.abs2 += (pn - y[0]).powi(2) + (pt[0] - y[1]).powi(2) + (pt[1] - y[2]).powi(2);
+                continue;
+            }
+            out.abs2 += term(pn, un);
+            self.polygon.decompose(pt, &mut dirs);
+            let rows_f = &p.rows[p.nb + base..p.nb + base + nd];
+            let s = rows_f
+                .iter()
+                .map(|r| -r.velocity(nu))
+                .fold(0.0f64, f64::max);
+            let mut total = 0.0;
+            for (d, r) in dirs.iter().zip(rows_f) {
+                total += d;
+                out.abs2 += term(*d, r.velocity(nu) + s);
+            }
+            out.abs2 += term(s, mu * pn - total);
+        }
+        self.dirs = dirs;
+        out
+    }
+}
+
+/// Squared parts of the residual: absolute, and the scales (the LCP's `q`,
+/// the joint rows' free residual velocities).
+#[derive(Debug, Default, Clone, Copy)]
+struct Parts {
+    abs2: f64,
+    q2: f64,
+    joint2: f64,
+}
+
+impl Parts {
+    /// Relative to `max(||q||, ||joint offsets||)`.
+    fn relative(self) -> f64 {
+        let (abs, scale) = (self.abs2.sqrt(), self.q2.max(self.joint2).sqrt());
         if scale > 0.0 {
             abs / scale
         } else {
             abs
         }
-    }
-}
-
-impl Pgs {
-    /// Absolute natural-map Coulomb residual of the circular cone with De
-    /// Saxce's change of variable (as for the corpus' 3-D problems): per
-    /// contact `r - proj_K(r - (u + mu |u_T| e_N))`, `r = [p_n, p_t]`,
-    /// `u = [v_n + a_n, v_t]`; normal rows without friction contribute their
-    /// complementarity residual.
-    fn coulomb_residual(&self, p: &PgsProblem, lambda: &[f64], nu: &[f64]) -> f64 {
-        let mut sum = 0.0;
-        for i in 0..p.nc {
-            let k = p.nb + i;
-            let pn = lambda[k];
-            let un = p.rows[k].velocity(nu) + p.offset[k] + p.cfm[k] * pn;
-            match self.block_of[i] {
-                None => {
-                    let r = pn - (pn - un).max(0.0);
-                    sum += r * r;
-                }
-                Some(f) => {
-                    let base = p.nb + p.nc + f * p.nd;
-                    let tg = &self.tangent[f];
-                    let ut = [tg.t1.velocity(nu), tg.t2.velocity(nu)];
-                    let pt = tangential(&lambda[base..base + p.nd]);
-                    let mu = p.mu[f];
-                    let un_hat = un + mu * (ut[0] * ut[0] + ut[1] * ut[1]).sqrt();
-                    let x = [pn - un_hat, pt[0] - ut[0], pt[1] - ut[1]];
-                    let y = project_cone(x, mu);
-                    sum += (pn - y[0]).powi(2) + (pt[0] - y[1]).powi(2) + (pt[1] - y[2]).powi(2);
-                }
-            }
-        }
-        sum.sqrt()
     }
 }
 
