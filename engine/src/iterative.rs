@@ -103,7 +103,9 @@ pub fn solve(
     scratch: &mut Scratch,
 ) -> Solved {
     m.add_friction_rows(step.contacts);
-    scratch.split.index(m, step.groups);
+    if solvers.exact.is_some() {
+        scratch.split.index(m, step.groups);
+    }
     scratch.done = split::Exact::default();
     let p = step.params;
     warm_start(m, state, step);
@@ -260,7 +262,7 @@ fn run(
                 islands: now.islands,
             };
         }
-        None => split.all_iterative(),
+        None => split.all_iterative(step.groups.len()),
     }
     let problem = PgsProblem {
         rows: &m.rows,

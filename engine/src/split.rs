@@ -129,10 +129,11 @@ impl Split {
         }
     }
 
-    /// Leaves every island to the iterative solver.
-    pub fn all_iterative(&mut self) {
+    /// Leaves every one of `islands` islands to the iterative solver (no
+    /// [`Split::index`] needed).
+    pub fn all_iterative(&mut self, islands: usize) {
         self.rest.clear();
-        self.rest.extend(0..self.shape.len() as u32);
+        self.rest.extend(0..islands as u32);
     }
 
     /// Islands with LCP unknowns (a jointed pair in flight has none).
