@@ -181,13 +181,17 @@ pub fn run(n: usize, settings: &Settings) -> Outcome {
         let r = e.step();
         if trace > 0 && (k % trace == 0 || r.error.is_some()) {
             eprintln!(
-                "pile {n} step {k}: {:.2} ms, {} {} work, residual {:.1e}, lcp {}, active {}, pen {:.2e} m, ke {:.3e}, asleep {}, {} (ms: collision {:.2}, assemble {:.2}, solve {:.2}, integrate {:.2}, measure {:.2})",
+                "pile {n} step {k}: {:.2} ms, {} {} work, residual {:.1e}, lcp {}, active {}, islands {} (lemke {}, pgs {}, largest {} bodies), pen {:.2e} m, ke {:.3e}, asleep {}, {} (ms: collision {:.2}, assemble {:.2}, solve {:.2}, integrate {:.2}, measure {:.2})",
                 r.timings.total * 1e3,
                 r.solver,
                 r.pivots,
                 r.residual,
                 r.lcp_size,
                 r.active_contacts,
+                r.islands,
+                r.lemke_islands,
+                r.pgs_islands,
+                r.largest_island,
                 r.max_penetration,
                 r.energy.kinetic,
                 r.sleeping,
