@@ -126,19 +126,16 @@ impl Islands {
     /// Sorts `rows` (the joint and normal rows of the step's problem) by
     /// island into `out`: two rows are in one island when a chain of rows
     /// links their bodies. A row on no body (a joint of the world to
-    /// itself) is an island of its own. Leaves the union-find as
-    /// [`Islands::partition`] would for the same links.
-    pub fn group(&mut self, bodies: usize, rows: &[Row], out: &mut Groups) {
-        self.reset(bodies);
-        for row in rows {
-            let (a, b) = (row.a.map(|j| j.body), row.b.map(|j| j.body));
-            for i in [a, b].into_iter().flatten() {
-                self.tied[i] = true;
-            }
-            if let (Some(a), Some(b)) = (a, b) {
-                self.union(a, b);
-            }
-        }
+    /// itself) is an island of its own. Returns the partition's summary
+    /// (bodies tied by the rows; [`Islands::partition`] of their links).
+    pub fn group(&mut self, bodies: usize, rows: &[Row], out: &mut Groups) -> Summary {
+        // A row on one body ties it to something static, as a plane does.
+        let links = rows.iter().filter_map(|row| match (row.a, row.b) {
+            (Some(a), Some(b)) => Some((a.body, Counterpart::Body(b.body))),
+            (Some(j), None) | (None, Some(j)) => Some((j.body, Counterpart::Plane(usize::MAX))),
+            (None, None) => None,
+        });
+        let summary = self.partition(bodies, links);
         out.of_root.clear();
         out.of_root.resize(bodies, u32::MAX);
         out.of_row.clear();
@@ -183,6 +180,7 @@ impl Islands {
         if let Some(first) = out.start.first_mut() {
             *first = 0;
         }
+        summary
     }
 
     /// Keeps, for each island of the last partition (a body in none is an
@@ -248,7 +246,14 @@ mod tests {
             Row::along(x, None, None),
         ];
         let mut groups = Groups::default();
-        islands.group(4, &rows, &mut groups);
+        let s = islands.group(4, &rows, &mut groups);
+        assert_eq!(
+            s,
+            Summary {
+                count: 2,
+                largest: 3
+            }
+        );
         assert_eq!(groups.len(), 3);
         assert_eq!(groups.rows_of(0), [0, 1, 2]);
         assert_eq!(groups.rows_of(1), [3]);

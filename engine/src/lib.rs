@@ -170,8 +170,10 @@ struct Workspace {
     /// not listed (`record_impulses`).
     sleeping_warm: Vec<WarmContact>,
     islands: island::Islands,
-    /// The step's rows by island, solved each on its own.
+    /// The step's rows by island, solved each on its own, and the last
+    /// solve's islands (the step report's, once the step succeeded).
     groups: island::Groups,
+    summary: island::Summary,
     /// Lemke's guess for this step's LCP (see `carry_guess`).
     guess: Vec<bool>,
     fallback: fallback::Scratch,
@@ -591,7 +593,7 @@ impl Engine {
             self.prepared = false;
         }
         self.record_impulses();
-        let summary = self.partition();
+        let summary = self.ws.summary;
         report.islands = summary.count;
         report.largest_island = summary.largest;
         if let Some(params) = self.model.params.sleep {
@@ -655,8 +657,9 @@ impl Engine {
             {
                 let _span = tracing::trace_span!("solve").entered();
                 let m = &mut ws.mlcp;
-                ws.islands
-                    .group(model.bodies.len(), &m.rows[..m.nb + m.nc], &mut ws.groups);
+                ws.summary =
+                    ws.islands
+                        .group(model.bodies.len(), &m.rows[..m.nb + m.nc], &mut ws.groups);
                 let step = fallback::Step {
                     nu_free: &ws.nu_free,
                     contacts: &ws.contacts,
@@ -817,28 +820,6 @@ impl Engine {
             }
         }
         woke
-    }
-
-    /// The islands of the step's final LCP: bodies tied by its contacts
-    /// and by the joints (`island.rs`).
-    fn partition(&mut self) -> island::Summary {
-        use model::Attachment;
-        let ws = &mut self.ws;
-        let contacts = ws
-            .contacts
-            .iter()
-            .filter(|c| c.in_lcp)
-            .map(|c| (c.geom.a, c.geom.b));
-        let joints = self.model.joints.iter().filter_map(|j| match (j.a, j.b) {
-            (Attachment::Body(a), Attachment::Body(b)) => Some((a, Counterpart::Body(b))),
-            // The world is static, as a plane: it ties one body to nothing.
-            (Attachment::Body(a), Attachment::World) | (Attachment::World, Attachment::Body(a)) => {
-                Some((a, Counterpart::Plane(usize::MAX)))
-            }
-            (Attachment::World, Attachment::World) => None,
-        });
-        ws.islands
-            .partition(self.model.bodies.len(), contacts.chain(joints))
     }
 
     /// For the trapezoid update, the bodies that keep the Euler update: the

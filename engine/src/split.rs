@@ -152,24 +152,15 @@ impl Split {
         m: &mut Mlcp,
         guess: Option<&[bool]>,
     ) -> Result<SolveInfo, LemkeError> {
-        let n = m.lcp_size();
-        let (nd, nc) = (m.nd, m.nc);
+        let (n, nd) = (m.lcp_size(), m.nd);
         if self.islands() <= 1 {
             let lcp = Lcp {
                 n,
                 m: &m.lcp_m,
                 q: &m.lcp_q,
             };
-            if let Some(guess) = guess {
-                self.slacks.clear();
-                let rows = m.contact_rows();
-                self.slacks
-                    .extend((0..m.nf).map(|f| (rows + f, nc + f * nd, nd)));
-                if let Some(info) = lemke.solve_guess(&lcp, guess, &self.slacks, &mut m.z) {
-                    return Ok(info);
-                }
-            }
-            return lemke.solve(&lcp, &mut m.z);
+            let layout = (m.nc, m.nf, m.nd);
+            return guess_or_solve(lemke, &lcp, guess, layout, &mut self.slacks, &mut m.z);
         }
         let mut total = SolveInfo {
             rung: Rung::Other,
@@ -221,18 +212,13 @@ impl Split {
             m: &self.m,
             q: &self.q,
         };
-        if let Some(guess) = guess {
+        let guess = guess.map(|guess| {
             self.guess.clear();
             self.guess.extend(u.iter().map(|&a| guess[a as usize]));
-            let (nci, nfi) = (self.shape[g].0 as usize, self.shape[g].1 as usize);
-            self.slacks.clear();
-            self.slacks
-                .extend((0..nfi).map(|f| (nci + nfi * nd + f, nci + f * nd, nd)));
-            if let Some(info) = lemke.solve_guess(&lcp, &self.guess, &self.slacks, &mut self.z) {
-                return Ok(info);
-            }
-        }
-        lemke.solve(&lcp, &mut self.z)
+            &self.guess[..]
+        });
+        let layout = (self.shape[g].0 as usize, self.shape[g].1 as usize, nd);
+        guess_or_solve(lemke, &lcp, guess, layout, &mut self.slacks, &mut self.z)
     }
 
     /// The small islands without joints solved by Lemke on blocks built
@@ -318,4 +304,27 @@ impl Split {
         }
         exact
     }
+}
+
+/// Lemke on `lcp` into `z`: from the support `guess` where one is given
+/// and its answer verifies ([`Lemke::solve_guess`]), else by the ladder.
+/// `(nc, nf, nd)` is the LCP's layout `[p_n; p_f; s]` (normal rows,
+/// friction blocks, directions), whose slacks the guess fills; `slacks`
+/// is scratch.
+fn guess_or_solve(
+    lemke: &mut Lemke,
+    lcp: &Lcp,
+    guess: Option<&[bool]>,
+    (nc, nf, nd): (usize, usize, usize),
+    slacks: &mut Vec<(usize, usize, usize)>,
+    z: &mut [f64],
+) -> Result<SolveInfo, LemkeError> {
+    if let Some(guess) = guess {
+        slacks.clear();
+        slacks.extend((0..nf).map(|f| (nc + nf * nd + f, nc + f * nd, nd)));
+        if let Some(info) = lemke.solve_guess(lcp, guess, slacks, z) {
+            return Ok(info);
+        }
+    }
+    lemke.solve(lcp, z)
 }
