@@ -1,11 +1,14 @@
 //! The `cosim` command: control, monitor and record a running server.
 
 use crate::pd::{self, Gains};
+use crate::view;
 use crate::{
     list_servers, ClientError, Connection, ControlResponse, Controller, InputFrame, Monitor,
     StateFrame, WaitMode, STATUS_PAUSED, STATUS_SHUTDOWN,
 };
 use clap::{Parser, Subcommand};
+use cosim_foxglove::record::{RecordError, Recording};
+use cosim_foxglove::{draw, schema, Drawing};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -51,6 +54,20 @@ pub enum Command {
         #[arg(long)]
         seconds: Option<f64>,
     },
+    /// Serve the server's state to Foxglove, live (Foxglove: Open
+    /// connection, Foxglove WebSocket, the printed address). A monitor:
+    /// the server does not wait for it.
+    View {
+        /// Address to listen on (port 0: any free port).
+        #[arg(long, default_value = "127.0.0.1:8765")]
+        listen: String,
+        /// Most frames per second sent to Foxglove.
+        #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
+        rate: f64,
+        /// Stop after this many seconds of wall time.
+        #[arg(long)]
+        seconds: Option<f64>,
+    },
     /// Write the server's states as `run` does (scene.toml, states.csv,
     /// impulses.csv, steps.csv), so that `cosim-server plot DIR` draws them.
     Record {
@@ -59,6 +76,10 @@ pub enum Command {
         /// Stop after this many frames (default: until the server stops).
         #[arg(long)]
         frames: Option<u64>,
+        /// Also write `recording.mcap` for Foxglove, as `cosim-server run
+        /// --mcap` does.
+        #[arg(long)]
+        mcap: bool,
     },
     /// The PD controller of the reference scene (see `cosim_client::pd`).
     Pd {
@@ -145,8 +166,35 @@ fn execute(cli: &Cli) -> Result<(), Box<dyn std::error::Error>> {
             println!("server '{name}' is shutting down");
         }
         Command::Monitor { seconds } => monitor(name, *seconds)?,
-        Command::Record { out, frames } => {
-            let n = record(name, out, *frames)?;
+        Command::View {
+            listen,
+            rate,
+            seconds,
+        } => {
+            if !(rate.is_finite() && *rate > 0.0) {
+                return Err(format!(
+                    "--rate must be a positive number of frames per second, not {rate}"
+                )
+                .into());
+            }
+            let opts = crate::view::ViewOptions {
+                listen: listen.clone(),
+                rate: *rate,
+                seconds: *seconds,
+            };
+            let stats = crate::view::view(name, &opts, |addr| {
+                println!(
+                    "cosim view: server '{name}' at ws://{addr} (Foxglove: Open connection, Foxglove WebSocket)"
+                );
+                let _ = std::io::stdout().flush();
+            })?;
+            println!(
+                "cosim view: {} frames drawn, {} messages sent, {} dropped for slow clients",
+                stats.frames, stats.sent, stats.dropped
+            );
+        }
+        Command::Record { out, frames, mcap } => {
+            let n = record(name, out, *frames, *mcap)?;
             println!("recorded {n} frames into {}", out.display());
         }
         Command::Pd {
@@ -249,11 +297,13 @@ fn monitor(name: &str, seconds: Option<f64>) -> Result<(), ClientError> {
     }
 }
 
-/// Writes the frames as `run` writes its files; returns the frame count.
+/// Writes the frames as `run` writes its files (and, with `mcap`,
+/// `recording.mcap`); returns the frame count.
 pub fn record(
     name: &str,
     out: &Path,
     frames: Option<u64>,
+    mcap: bool,
 ) -> Result<u64, Box<dyn std::error::Error>> {
     let conn = Connection::connect(name)?;
     let toml = conn.scene_toml()?;
@@ -261,7 +311,7 @@ pub fn record(
     let m = Monitor::open(name, crate::services::MAX_STATE_BUFFER)?;
     std::fs::create_dir_all(out)?;
     std::fs::write(out.join("scene.toml"), &toml)?;
-    let mut rec = Recorder::create(out, scene)?;
+    let mut rec = Recorder::create(out, scene, mcap)?;
     let mut count = 0u64;
     let mut last_seq = None;
     let mut dropped = 0u64;
@@ -295,7 +345,7 @@ pub fn record(
             rec.flush()?;
         }
     }
-    rec.flush()?;
+    rec.finish()?;
     if dropped > 0 {
         eprintln!("warning: {dropped} frames were overwritten before they could be read");
     }
@@ -305,6 +355,9 @@ pub fn record(
 /// The CSV files of a recording, in the formats of `cosim-server run`.
 struct Recorder {
     scene: cosim_shared::Scene,
+    /// `--mcap`: `recording.mcap` beside the CSV files, written as the
+    /// frames come.
+    mcap: Option<(Recording, Drawing)>,
     states: std::io::BufWriter<std::fs::File>,
     impulses: std::io::BufWriter<std::fs::File>,
     steps: std::io::BufWriter<std::fs::File>,
@@ -312,7 +365,7 @@ struct Recorder {
 }
 
 impl Recorder {
-    fn create(dir: &Path, scene: cosim_shared::Scene) -> std::io::Result<Recorder> {
+    fn create(dir: &Path, scene: cosim_shared::Scene, mcap: bool) -> std::io::Result<Recorder> {
         let open = |n: &str, header: &str| -> std::io::Result<_> {
             let mut w = std::io::BufWriter::new(std::fs::File::create(dir.join(n))?);
             writeln!(w, "{header}")?;
@@ -325,9 +378,72 @@ impl Recorder {
                 "steps.csv",
                 "step,t,status,residual,lcp_size,active_contacts",
             )?,
+            mcap: match mcap {
+                true => Some((
+                    Recording::create(&dir.join("recording.mcap"))
+                        .map_err(std::io::Error::other)?,
+                    Drawing::new(&scene),
+                )),
+                false => None,
+            },
             scene,
             last_step: None,
         })
+    }
+
+    /// The frame's state on the recording's channels, as `run --mcap`
+    /// writes them (forces go with the impulses, in `frame`).
+    fn mcap_state(&mut self, f: &StateFrame) -> Result<(), RecordError> {
+        let Some((rec, drawing)) = self.mcap.as_mut() else {
+            return Ok(());
+        };
+        let t = f.sim_time;
+        let poses = view::poses(f);
+        let msg = view::scene_message(drawing, f, &poses);
+        rec.put("/scene", schema::scene_update, t, &msg)?;
+        rec.put(
+            "/tf",
+            schema::frame_transforms,
+            t,
+            &drawing.frame_transforms(t, &poses),
+        )?;
+        for (b, desc) in f.bodies().iter().zip(&self.scene.bodies) {
+            let msg = draw::body_state(&view::body_row(b));
+            rec.put(
+                &format!("/bodies/{}", desc.name),
+                schema::body_state,
+                t,
+                &msg,
+            )?;
+        }
+        let report = || schema::step_report(&view::SOLVER_FIELDS);
+        rec.put("/solver", report, t, &view::solver_message(f))
+    }
+
+    /// An impulse of the last step as a force on `/forces/KIND/NAME`.
+    fn mcap_force(
+        &mut self,
+        kind: &str,
+        name: &str,
+        t: f64,
+        h: f64,
+        p: [f64; 3],
+    ) -> Result<(), RecordError> {
+        let Some((rec, _)) = self.mcap.as_mut() else {
+            return Ok(());
+        };
+        let f = nalgebra::Vector3::from(p) / h;
+        let msg = serde_json::json!({ "force": draw::vec3(&f), "magnitude": f.norm() });
+        rec.put(&format!("/forces/{kind}/{name}"), schema::force, t, &msg)
+    }
+
+    /// Closes the recording (its summary is written last).
+    fn finish(mut self) -> std::io::Result<()> {
+        self.flush()?;
+        if let Some((rec, _)) = self.mcap.take() {
+            rec.finish().map_err(std::io::Error::other)?;
+        }
+        Ok(())
     }
 
     /// One frame; a frame repeating the last step (after a pause or a
@@ -339,6 +455,8 @@ impl Recorder {
         }
         self.last_step = Some(f.step);
         let t = f.sim_time;
+        let h = if f.dt > 0.0 { f.dt } else { 1.0 };
+        self.mcap_state(f).map_err(std::io::Error::other)?;
         for (b, desc) in f.bodies().iter().zip(&self.scene.bodies) {
             write!(self.states, "{},{t},{}", f.step, desc.name)?;
             for v in b
@@ -365,8 +483,12 @@ impl Recorder {
                     "{},{t},joint,{},{},{},{},{},{}",
                     f.step, joint.name, joint.body_a, joint.body_b, p[0], p[1], p[2]
                 )?;
+                let name = joint.name.clone();
+                self.mcap_force("joint", &name, t, h, *p)
+                    .map_err(std::io::Error::other)?;
             }
         }
+        let mut forces = Vec::new();
         for c in f.contacts() {
             let a = self
                 .scene
@@ -386,8 +508,13 @@ impl Recorder {
                         "{},{t},{kind},{a}/{b},{a},{b},{},{},{}",
                         f.step, p[0], p[1], p[2]
                     )?;
+                    forces.push((kind, format!("{a}/{b}"), p));
                 }
             }
+        }
+        for (kind, name, p) in forces {
+            self.mcap_force(kind, &name, t, h, p)
+                .map_err(std::io::Error::other)?;
         }
         writeln!(
             self.steps,

@@ -12,6 +12,7 @@
 
 pub mod cli;
 pub mod pd;
+pub mod view;
 
 pub use cosim_shared as shared;
 pub use cosim_shared::wire::*;

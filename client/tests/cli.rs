@@ -12,6 +12,7 @@ fn commands_against_a_missing_server_name_it_and_fail() {
         &["pause"],
         &["step", "3"],
         &["monitor", "--seconds", "1"],
+        &["view", "--listen", "127.0.0.1:0", "--seconds", "1"],
     ] {
         let out = Command::new(EXE)
             .args(["--name", &name])
@@ -45,4 +46,17 @@ fn a_bad_torque_file_names_the_line_and_field() {
         err.contains("torques.csv:3: torque = \"abc\" is not a number"),
         "{err}"
     );
+}
+
+#[test]
+fn a_view_rate_that_is_not_positive_is_refused_by_name() {
+    for rate in ["0", "-5", "NaN"] {
+        let out = Command::new(EXE)
+            .args(["view", "--rate", rate])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(1), "{rate}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--rate must be a positive"), "{rate}: {err}");
+    }
 }

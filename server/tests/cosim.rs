@@ -561,7 +561,7 @@ fn a_recording_matches_the_servers_own_files_and_plots() {
     let rec_path = rec.path().to_path_buf();
     let rname = name.clone();
     let recorder = std::thread::spawn(move || {
-        cosim_client::cli::record(&rname, &rec_path, None).map_err(|e| e.to_string())
+        cosim_client::cli::record(&rname, &rec_path, None, true).map_err(|e| e.to_string())
     });
     // The recorder writes scene.toml once subscribed: from then on it
     // receives every frame, so the controller may join.
@@ -586,6 +586,7 @@ fn a_recording_matches_the_servers_own_files_and_plots() {
     let ours = positions(dir.path(), "lower");
     let theirs = positions(rec.path(), "lower");
     assert_eq!(ours, theirs, "the recording holds the server's states");
+    recorded_mcap_reads_back(rec.path(), theirs.len());
     let figures = cosim_server::plot::render(
         rec.path(),
         &cosim_server::plot::PlotOptions {
@@ -595,6 +596,57 @@ fn a_recording_matches_the_servers_own_files_and_plots() {
     )
     .expect("plot the recording");
     assert!(!figures.is_empty());
+}
+
+/// `cosim record --mcap`'s `recording.mcap` read back with the format's
+/// reference reader (server/tests/read_mcap.py): a state message per
+/// recorded step on each state channel, a force message per impulses.csv
+/// row, and the hardest floor contact's force as impulse over h.
+fn recorded_mcap_reads_back(dir: &Path, states: usize) {
+    let csv = std::fs::read_to_string(dir.join("impulses.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .filter(|c: &Vec<&str>| c[2] == "normal" && c[3] == "lower/floor")
+        .collect();
+    let norm = |c: &[&str]| {
+        let p: Vec<f64> = c[6..9].iter().map(|v| v.parse().unwrap()).collect();
+        (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()
+    };
+    let hardest = rows
+        .iter()
+        .max_by(|a, b| norm(a).total_cmp(&norm(b)))
+        .expect("the lower sphere lands");
+    let h = 1e-3;
+    let log_time = (hardest[1].parse::<f64>().unwrap() * 1e9).round() as u64;
+    let v = common::read_mcap(&dir.join("recording.mcap"), log_time, "lower/floor");
+    let topics = &v["topics"];
+    for (topic, schema) in [
+        ("/scene", "foxglove.SceneUpdate"),
+        ("/tf", "foxglove.FrameTransforms"),
+        ("/bodies/lower", "cosim.BodyState"),
+        ("/solver", "cosim.StepReport"),
+    ] {
+        let t = &topics[topic];
+        assert_eq!(t["schema"], schema, "{topic}");
+        assert_eq!(t["message_encoding"], "json", "{topic}");
+        assert_eq!(t["messages"], states as u64, "{topic}");
+    }
+    assert_eq!(
+        topics["/forces/normal/lower/floor"]["messages"],
+        rows.len() as u64
+    );
+    let force = v["force"]["magnitude"]
+        .as_f64()
+        .expect("the force at that time");
+    assert!(
+        (force - norm(hardest) / h).abs() <= 1e-9 * force,
+        "{force} against {} / h",
+        norm(hardest)
+    );
+    let scene = v["scene"].as_array().expect("the scene at that time");
+    assert!(scene.iter().any(|e| e["id"] == "body/lower"));
 }
 
 #[test]
@@ -1888,4 +1940,211 @@ fn a_four_thousand_sphere_pile_is_served_in_lockstep() {
     assert_eq!(summary(&out)["steps"], STEPS);
     let (ok, text) = replay(&out);
     assert!(ok, "{text}");
+}
+
+/// One Foxglove WebSocket message as the view sent it.
+enum Fox {
+    Json(serde_json::Value),
+    /// Opcode 1: subscription id, time (ns), payload as JSON.
+    Data(u32, u64, serde_json::Value),
+    /// Opcode 2: time (ns).
+    Time(u64),
+}
+
+fn fox(m: tungstenite::Message) -> Option<Fox> {
+    match m {
+        tungstenite::Message::Text(t) => Some(Fox::Json(
+            serde_json::from_str(t.as_str()).expect("a JSON text message"),
+        )),
+        tungstenite::Message::Binary(b) => match b[0] {
+            1 => Some(Fox::Data(
+                u32::from_le_bytes(b[1..5].try_into().unwrap()),
+                u64::from_le_bytes(b[5..13].try_into().unwrap()),
+                serde_json::from_slice(&b[13..]).expect("a JSON payload"),
+            )),
+            2 => Some(Fox::Time(u64::from_le_bytes(b[1..9].try_into().unwrap()))),
+            op => panic!("unknown binary opcode {op}"),
+        },
+        _ => None,
+    }
+}
+
+#[test]
+fn the_live_view_serves_foxglove_the_servers_states() {
+    use tungstenite::client::IntoClientRequest;
+    let (server, dir, name) = serve_test(
+        "view",
+        &["--controllers", "1", "--realtime", "1", "--steps", "400"],
+    );
+    // The view as `cosim view --listen 127.0.0.1:0 --rate 200` runs it.
+    let (tx, rx) = std::sync::mpsc::channel();
+    let vname = name.clone();
+    let view = std::thread::spawn(move || {
+        let opts = cosim_client::view::ViewOptions {
+            listen: "127.0.0.1:0".into(),
+            rate: 200.0,
+            seconds: Some(60.0),
+        };
+        cosim_client::view::view(&vname, &opts, |addr| tx.send(addr).unwrap())
+            .map_err(|e| e.to_string())
+    });
+    let addr = rx
+        .recv_timeout(Duration::from_secs(20))
+        .expect("the view listens");
+    let url = format!("ws://{addr}");
+    // A WebSocket client that does not ask for the protocol is refused.
+    let refused = tungstenite::connect(url.as_str());
+    assert!(
+        matches!(&refused, Err(tungstenite::Error::Http(r)) if r.status() == 400),
+        "{:?}",
+        refused.map(|_| ())
+    );
+
+    let mut req = url.as_str().into_client_request().unwrap();
+    req.headers_mut().insert(
+        "Sec-WebSocket-Protocol",
+        "foxglove.websocket.v1".parse().unwrap(),
+    );
+    let (mut ws, resp) = tungstenite::connect(req).expect("connect as Foxglove does");
+    assert_eq!(
+        resp.headers()["Sec-WebSocket-Protocol"],
+        "foxglove.websocket.v1"
+    );
+    let next = |ws: &mut tungstenite::WebSocket<_>| loop {
+        if let Some(m) = fox(ws.read().expect("a message")) {
+            return m;
+        }
+    };
+    let Fox::Json(info) = next(&mut ws) else {
+        panic!("serverInfo first")
+    };
+    assert_eq!(info["op"], "serverInfo");
+    assert!(info["capabilities"]
+        .as_array()
+        .unwrap()
+        .contains(&"time".into()));
+    let Fox::Json(adv) = next(&mut ws) else {
+        panic!("advertise second")
+    };
+    assert_eq!(adv["op"], "advertise");
+    let channels: std::collections::BTreeMap<u64, String> = adv["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| {
+            assert_eq!(c["encoding"], "json");
+            assert_eq!(c["schemaEncoding"], "jsonschema");
+            let schema: serde_json::Value =
+                serde_json::from_str(c["schema"].as_str().unwrap()).expect("a JSON schema");
+            assert_eq!(schema["title"], c["schemaName"]);
+            (
+                c["id"].as_u64().unwrap(),
+                c["topic"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect();
+    let topics: Vec<&str> = channels.values().map(|s| s.as_str()).collect();
+    for t in ["/scene", "/tf", "/solver", "/bodies/upper", "/bodies/lower"] {
+        assert!(topics.contains(&t), "{t} not in {topics:?}");
+    }
+    // Subscription ids of the client's choosing: 100 + channel id.
+    let subs: Vec<serde_json::Value> = channels
+        .keys()
+        .map(|&id| serde_json::json!({ "id": 100 + id, "channelId": id }))
+        .collect();
+    let subscribe = serde_json::json!({ "op": "subscribe", "subscriptions": subs });
+    ws.send(tungstenite::Message::text(subscribe.to_string()))
+        .unwrap();
+    // A bad request is answered with a status naming what is wrong.
+    let bad = r#"{"op":"subscribe","subscriptions":[{"id":7,"channelId":999}]}"#;
+    ws.send(tungstenite::Message::text(bad)).unwrap();
+
+    // The controller joins once the view serves: the states it drives
+    // are the ones the view must show.
+    let cname = name.clone();
+    let controller = std::thread::spawn(move || {
+        let mut c = Controller::join(&cname, WaitMode::Hybrid).expect("join");
+        answer_until_shutdown(&mut c, |c| c.send(InputFrame::default()).unwrap());
+    });
+    let mut status = None;
+    let mut scenes = Vec::new();
+    let mut bodies = Vec::new();
+    let mut times = Vec::new();
+    let mut solver_steps = Vec::new();
+    if let tungstenite::stream::MaybeTlsStream::Plain(tcp) = ws.get_mut() {
+        tcp.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+    }
+    // Until the view leaves (the server stopped) and closes the socket.
+    while let Ok(m) = ws.read() {
+        match fox(m) {
+            Some(Fox::Json(j)) if j["op"] == "status" => status = Some(j),
+            Some(Fox::Json(j)) => panic!("unexpected {j}"),
+            Some(Fox::Data(sub, t, msg)) => {
+                let topic = &channels[&(u64::from(sub) - 100)];
+                match topic.as_str() {
+                    "/scene" => scenes.push((t, msg)),
+                    "/bodies/upper" => bodies.push((t, msg)),
+                    "/solver" => solver_steps.push(msg["step"].as_u64().unwrap()),
+                    _ => {}
+                }
+            }
+            Some(Fox::Time(t)) => times.push(t),
+            None => {}
+        }
+    }
+    controller.join().unwrap();
+    assert!(server.finish().0.success());
+    let stats = view.join().unwrap().expect("the view ends with the server");
+    assert_eq!(stats.dropped, 0);
+    assert!(stats.frames as usize >= scenes.len());
+
+    let status = status.expect("a status for the bad subscription");
+    assert_eq!(status["level"], 2);
+    assert!(
+        status["message"]
+            .as_str()
+            .unwrap()
+            .contains("channelId 999"),
+        "{status}"
+    );
+    assert!(
+        scenes.len() >= 10,
+        "{} scenes, {} times, view {stats:?}, summary {}",
+        scenes.len(),
+        times.len(),
+        summary(dir.path())
+    );
+    assert!(times.windows(2).all(|w| w[0] <= w[1]), "time goes back");
+    assert!(solver_steps.windows(2).all(|w| w[0] < w[1]));
+    // Every drawn state is one the server wrote, to the last digit JSON
+    // keeps: the sphere at the lower body's position, its size 2 r.
+    let lower = positions(dir.path(), "lower");
+    let upper = positions(dir.path(), "upper");
+    let h = 1e-3;
+    let at = |states: &[(u64, [f64; 3])], t: u64| {
+        let step = (t as f64 * 1e-9 / h).round() as u64;
+        states
+            .iter()
+            .find(|s| s.0 == step)
+            .unwrap_or_else(|| panic!("no state at step {step}"))
+            .1
+    };
+    let xyz = |v: &serde_json::Value| ["x", "y", "z"].map(|c| v[c].as_f64().unwrap());
+    let close = |a: [f64; 3], b: [f64; 3]| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-12);
+    for (t, msg) in &scenes {
+        let e = &msg["entities"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|e| e["id"] == "body/lower")
+            .expect("the lower body drawn")["spheres"][0];
+        assert!(
+            close(xyz(&e["pose"]["position"]), at(&lower, *t)),
+            "t {t}: {e}"
+        );
+        assert_eq!(e["size"]["x"], 0.16);
+    }
+    for (t, msg) in &bodies {
+        assert!(close(xyz(&msg["position"]), at(&upper, *t)), "t {t}: {msg}");
+    }
 }

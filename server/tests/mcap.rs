@@ -6,7 +6,6 @@
 mod common;
 
 use common::TempDir;
-use std::path::Path;
 use std::process::Command;
 
 const BIN: &str = env!("CARGO_BIN_EXE_cosim-server");
@@ -41,20 +40,7 @@ fn a_recording_reads_back_with_the_reference_reader() {
         .expect("the lower sphere lands");
     let h = 1e-3;
     let log_time = (step as f64 * h * 1e9).round() as u64;
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/read_mcap.py");
-    let read = Command::new("python3")
-        .arg(script)
-        .arg(out.join("recording.mcap"))
-        .arg(log_time.to_string())
-        .arg("lower/floor")
-        .output()
-        .expect("python3");
-    assert!(
-        read.status.success(),
-        "{}",
-        String::from_utf8_lossy(&read.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&read.stdout).unwrap();
+    let v = common::read_mcap(&out.join("recording.mcap"), log_time, "lower/floor");
     let topics = &v["topics"];
     for (topic, schema, count) in [
         ("/scene", "foxglove.SceneUpdate", 701),

@@ -17,7 +17,7 @@ const BIN: &str = env!("CARGO_BIN_EXE_cosim-server");
 
 /// Every figure: the reference scene has joints and friction, so it
 /// draws them all.
-const FIGURES: [&str; 11] = cosim_server::plot::figures::STEMS;
+const FIGURES: [&str; 12] = cosim_server::plot::figures::STEMS;
 fn run_plot(out: &Path) {
     let status = Command::new(BIN)
         .args([
@@ -322,6 +322,7 @@ fn figures_leave_out_empty_groups_and_mark_a_failure() {
     assert!(plots.join("normal_forces.png").exists());
     assert!(!plots.join("friction_forces.png").exists());
     assert!(!plots.join("joint_forces.png").exists());
+    assert!(!plots.join("joint_angles.png").exists());
 
     // The reference scene with a force that overflows the first step.
     let text = std::fs::read_to_string(scenes.join("reference.toml")).unwrap();

@@ -254,8 +254,8 @@ pub struct PlotArgs {
     /// this one's thin over them), into DIR/compare/ unless --out says.
     pub other: Option<PathBuf>,
     /// Only these figures, comma-separated (positions, velocities,
-    /// quaternions, energy, normal_forces, friction_forces, joint_forces,
-    /// errors, timings, solver, lcp_size).
+    /// quaternions, joint_angles, energy, normal_forces, friction_forces,
+    /// joint_forces, errors, timings, solver, lcp_size).
     #[arg(long)]
     pub only: Option<String>,
     /// Only these bodies (comma-separated names) and their contacts.
@@ -281,6 +281,9 @@ pub struct PlotArgs {
     /// smaller GIF, faster).
     #[arg(long)]
     pub fps: Option<f64>,
+    /// Animation size WIDTHxHEIGHT in pixels (default 640x480).
+    #[arg(long)]
+    pub gif_size: Option<String>,
     /// Also write N evenly spread frames of the animation as PNG stills.
     #[arg(long, default_value_t = 0)]
     pub stills: usize,
@@ -330,6 +333,9 @@ pub struct RunArgs {
     /// Animation frames per simulated second (default 25).
     #[arg(long)]
     pub fps: Option<f64>,
+    /// Animation size WIDTHxHEIGHT in pixels (default 640x480).
+    #[arg(long)]
+    pub gif_size: Option<String>,
     /// Write DIR/recording.mcap: the run for Foxglove (3-D scene, frame
     /// transforms, numeric channels for its plot panel).
     #[arg(long)]

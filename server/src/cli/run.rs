@@ -130,10 +130,18 @@ pub fn run(args: &RunArgs) -> ExitCode {
         }
     };
     if args.plot || args.animate {
+        let gif_size = match args.gif_size.as_deref().map(parse_size).transpose() {
+            Ok(s) => s,
+            Err(m) => {
+                eprintln!("error: --gif-size {m}");
+                return ExitCode::from(EXIT_BAD_INPUT);
+            }
+        };
         let opts = PlotOptions {
             figures: args.plot,
             animation: args.animate,
             fps: args.fps,
+            gif_size,
             ..PlotOptions::default()
         };
         if let Err(code) = draw(&out, &opts, args.quiet) {
@@ -192,6 +200,13 @@ pub fn plot(args: &PlotArgs) -> ExitCode {
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
+    let gif_size = match args.gif_size.as_deref().map(parse_size).transpose() {
+        Ok(s) => s,
+        Err(m) => {
+            eprintln!("error: --gif-size {m}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
     let figure = plot::figures::Options {
         only: args
             .only
@@ -224,6 +239,7 @@ pub fn plot(args: &PlotArgs) -> ExitCode {
         from: args.from,
         to: args.to,
         fps: args.fps,
+        gif_size,
         bodies: args
             .bodies
             .as_ref()

@@ -178,6 +178,7 @@ fn options(args: &ServeArgs) -> Result<(cosim_shared::Scene, ServeOptions), Stri
         animate: false,
         mcap: false,
         fps: None,
+        gif_size: None,
     };
     let scene = super::run::load(&run).map_err(|e| e.to_string())?;
     let steps = args.steps.or_else(|| {

@@ -3,20 +3,25 @@
 //! Planes are shaded patches, spheres shaded discs with a body-fixed dot (so
 //! rolling and spinning show: solid on the near half, a ring on the far
 //! half), each with a shadow and a drop line to the floor (so height reads)
-//! and its name; joints dark links from each body's centre to the anchor;
+//! and its name, over a grid on the floor; joints dark links from each body's centre to the anchor;
 //! contact forces red arrows pushing at the contact point (length by
 //! decades of newtons); a failed run's frames after the failure carry a
 //! banner.
 
 use super::data::RunData;
+use super::gif::GifWriter;
 use super::{color, PlotError, FONT};
 use crate::engine::model::{Attachment, Model, Shape};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use plotters::prelude::*;
 use std::path::Path;
 
+/// The animation's default size in pixels (`--gif-size` sets another).
 pub const WIDTH: u32 = 640;
 pub const HEIGHT: u32 = 480;
+/// Contact force arrows and the failure banner.
+const ARROW_RED: [u8; 3] = [210, 30, 30];
+const BANNER_RED: [u8; 3] = [200, 0, 0];
 /// Frames per second of simulated time at real-time playback.
 pub const FPS: f64 = 25.0;
 /// Most frames in one GIF; longer runs show fewer frames per second, each
@@ -32,6 +37,9 @@ pub struct Camera {
     pub up: Vector3<f64>,
     pub forward: Vector3<f64>,
     pub scale: f64,
+    /// The image's size in pixels.
+    pub width: u32,
+    pub height: u32,
 }
 
 impl Camera {
@@ -39,8 +47,8 @@ impl Camera {
     pub fn project(&self, p: &Vector3<f64>) -> (f64, f64) {
         let d = p - self.target;
         (
-            WIDTH as f64 / 2.0 + self.scale * d.dot(&self.right),
-            HEIGHT as f64 / 2.0 - self.scale * d.dot(&self.up),
+            self.width as f64 / 2.0 + self.scale * d.dot(&self.right),
+            self.height as f64 / 2.0 - self.scale * d.dot(&self.up),
         )
     }
 
@@ -49,12 +57,22 @@ impl Camera {
         (p - self.target).dot(&self.forward)
     }
 
-    /// The camera of a run: the scene's `[camera]` where given, else framed
-    /// on every position the bodies take.
+    /// The camera of a run at the default size: the scene's `[camera]`
+    /// where given, else framed on every position the bodies take.
     pub fn frame(
         model: &Model,
         camera: Option<&cosim_shared::CameraDesc>,
         run: &RunData,
+    ) -> Camera {
+        Camera::frame_sized(model, camera, run, (WIDTH, HEIGHT))
+    }
+
+    /// [`Camera::frame`] for an image of `(width, height)` pixels.
+    pub fn frame_sized(
+        model: &Model,
+        camera: Option<&cosim_shared::CameraDesc>,
+        run: &RunData,
+        (width, height): (u32, u32),
     ) -> Camera {
         // By default look in from the open side: along the sum of the
         // planes' normals (into a corner or a trough), raised a little.
@@ -111,7 +129,7 @@ impl Camera {
             .map(Vector3::from)
             .unwrap_or((lo + hi) / 2.0);
         let scale = match camera.and_then(|c| c.width) {
-            Some(w) => WIDTH as f64 / w,
+            Some(w) => width as f64 / w,
             None => {
                 // Fit the projected box, with room around it.
                 let (mut w, mut h) = (0.0f64, 0.0f64);
@@ -124,7 +142,7 @@ impl Camera {
                     w = w.max(2.0 * c.dot(&right).abs());
                     h = h.max(2.0 * c.dot(&up).abs());
                 }
-                0.8 * (WIDTH as f64 / w.max(1e-6)).min(HEIGHT as f64 / h.max(1e-6))
+                0.8 * (width as f64 / w.max(1e-6)).min(height as f64 / h.max(1e-6))
             }
         };
         Camera {
@@ -133,6 +151,8 @@ impl Camera {
             up,
             forward,
             scale,
+            width,
+            height,
         }
     }
 }
@@ -203,6 +223,131 @@ fn clip(poly: &[Vector3<f64>], n: &Vector3<f64>, offset: f64) -> Vec<Vector3<f64
     out
 }
 
+/// The part of the segment from `a` to `b` (pixels) inside the camera's
+/// image (Liang-Barsky), rounded to pixels.
+fn inside_image(a: (f64, f64), b: (f64, f64), cam: &Camera) -> Option<((i32, i32), (i32, i32))> {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    let (w, h) = (cam.width as f64 - 1.0, cam.height as f64 - 1.0);
+    for (p, q) in [(-dx, a.0), (dx, w - a.0), (-dy, a.1), (dy, h - a.1)] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None;
+            }
+        } else {
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+    }
+    if t0 > t1 {
+        return None;
+    }
+    let at = |t: f64| ((a.0 + t * dx).round() as i32, (a.1 + t * dy).round() as i32);
+    Some((at(t0), at(t1)))
+}
+
+/// The part of a convex polygon (pixels) inside the camera's image
+/// (Sutherland-Hodgman against its four sides), rounded to pixels.
+fn polygon_in_image(poly: &[(f64, f64)], cam: &Camera) -> Vec<(i32, i32)> {
+    let (w, h) = (cam.width as f64 - 1.0, cam.height as f64 - 1.0);
+    // Each side: how far inside a point is (keep where >= 0), as
+    // (sign of x, sign of y, offset): s_x x + s_y y + offset.
+    let sides = [
+        (1.0, 0.0, 0.0),
+        (-1.0, 0.0, w),
+        (0.0, 1.0, 0.0),
+        (0.0, -1.0, h),
+    ];
+    let mut out = poly.to_vec();
+    for (sx, sy, offset) in sides {
+        let f = |p: &(f64, f64)| sx * p.0 + sy * p.1 + offset;
+        let input = std::mem::take(&mut out);
+        for k in 0..input.len() {
+            let (a, b) = (input[k], input[(k + 1) % input.len()]);
+            let (fa, fb) = (f(&a), f(&b));
+            if fa >= 0.0 {
+                out.push(a);
+            }
+            if (fa >= 0.0) != (fb >= 0.0) {
+                let t = fa / (fa - fb);
+                out.push((a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)));
+            }
+        }
+    }
+    out.iter()
+        .map(|p| (p.0.round() as i32, p.1.round() as i32))
+        .collect()
+}
+
+/// A "nice" grid spacing (1, 2 or 5 times a power of ten) near `span`.
+fn nice(span: f64) -> f64 {
+    let p = 10f64.powf(span.log10().floor());
+    [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * p)
+        .find(|s| *s >= span)
+        .unwrap_or(10.0 * p)
+}
+
+/// The floor's grid lines in the patch around the view's target (half
+/// side `half`), about twelve across, at multiples of a nice spacing from
+/// the world origin's foot on the plane (so the grid stays put as bodies
+/// move), each cut to the side of every other plane the bodies are on.
+fn floor_grid(
+    model: &Model,
+    floor: &crate::engine::model::Plane,
+    cam: &Camera,
+    half: f64,
+) -> Vec<(Vector3<f64>, Vector3<f64>)> {
+    let n = floor.normal;
+    let p0 = cam.target - n * (n.dot(&cam.target) - floor.offset);
+    let origin = n * floor.offset;
+    // Along the world's x where the floor allows (its grid then reads as
+    // metres of x and y), else any direction in the plane.
+    let x = Vector3::x() - n * n.x;
+    let t1 = if x.norm() > 0.1 {
+        x.normalize()
+    } else {
+        crate::engine::contact::perpendicular(&n)
+    };
+    let t2 = n.cross(&t1);
+    let spacing = nice(2.0 * half / 12.0);
+    let mut lines = Vec::new();
+    for (along, across) in [(t1, t2), (t2, t1)] {
+        let c = (p0 - origin).dot(&along);
+        let d = (p0 - origin).dot(&across);
+        let first = ((c - half) / spacing).ceil() as i64;
+        let last = ((c + half) / spacing).floor() as i64;
+        for k in first..=last {
+            let base = origin + along * (k as f64 * spacing);
+            let mut seg = Some((base + across * (d - half), base + across * (d + half)));
+            for other in &model.planes {
+                if std::ptr::eq(other, floor) {
+                    continue;
+                }
+                seg = seg.and_then(|(a, b)| {
+                    let (fa, fb) = (
+                        other.normal.dot(&a) - other.offset,
+                        other.normal.dot(&b) - other.offset,
+                    );
+                    match (fa >= 0.0, fb >= 0.0) {
+                        (true, true) => Some((a, b)),
+                        (false, false) => None,
+                        (true, false) => Some((a, a + (b - a) * (fa / (fa - fb)))),
+                        (false, true) => Some((a + (b - a) * (fa / (fa - fb)), b)),
+                    }
+                });
+            }
+            lines.extend(seg);
+        }
+    }
+    lines
+}
+
 /// Draws frame showing state `i` of the run.
 fn draw_frame<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
@@ -226,7 +371,7 @@ fn draw_frame<DB: DrawingBackend>(
     // cut to the side of every other plane that the bodies are on (so a
     // corner shows as a corner), farthest first, shaded by how squarely it
     // faces the camera.
-    let half = (WIDTH.max(HEIGHT) as f64) / cam.scale;
+    let half = (cam.width.max(cam.height) as f64) / cam.scale;
     let mut patches: Vec<(f64, u8, Vec<Vector3<f64>>)> = Vec::new();
     for (k, p) in model.planes.iter().enumerate() {
         let p0 = cam.target - p.normal * (p.normal.dot(&cam.target) - p.offset);
@@ -249,19 +394,29 @@ fn draw_frame<DB: DrawingBackend>(
     }
     patches.sort_by(|a, b| b.0.total_cmp(&a.0));
     for (_, grey, poly) in &patches {
-        let corners: Vec<(i32, i32)> = poly.iter().map(pix).collect();
+        // Cut to the image (plotters would move the corners outside it
+        // onto its border, changing the patch's shape); the outline only
+        // along the patch's own edges, not the image's border.
+        let projected: Vec<(f64, f64)> = poly.iter().map(|p| cam.project(p)).collect();
+        let corners = polygon_in_image(&projected, cam);
+        if corners.len() < 3 {
+            continue;
+        }
         area.draw(&Polygon::new(
             corners.clone(),
             RGBColor(*grey, *grey, grey - 8).filled(),
         ))
         .map_err(e)?;
-        let mut outline = corners;
-        outline.push(outline[0]);
-        area.draw(&PathElement::new(
-            outline,
-            RGBColor(150, 150, 145).stroke_width(1),
-        ))
-        .map_err(e)?;
+        for k in 0..projected.len() {
+            let (a, b) = (projected[k], projected[(k + 1) % projected.len()]);
+            if let Some((a, b)) = inside_image(a, b, cam) {
+                area.draw(&PathElement::new(
+                    vec![a, b],
+                    RGBColor(150, 150, 145).stroke_width(1),
+                ))
+                .map_err(e)?;
+            }
+        }
     }
 
     // Shadows and drop lines on the floor: the plane that faces up the
@@ -277,6 +432,20 @@ fn draw_frame<DB: DrawingBackend>(
         .iter()
         .filter(|p| p.normal.dot(&up) > 0.5)
         .max_by(|a, b| a.normal.dot(&up).total_cmp(&b.normal.dot(&up)));
+    if let Some(f) = floor {
+        for (a, b) in floor_grid(model, f, cam, half) {
+            // Cut to the image first: plotters moves an end outside the
+            // image onto its border, which turns the line.
+            let Some((a, b)) = inside_image(cam.project(&a), cam.project(&b), cam) else {
+                continue;
+            };
+            area.draw(&PathElement::new(
+                vec![a, b],
+                RGBColor(140, 140, 135).mix(0.6).stroke_width(1),
+            ))
+            .map_err(e)?;
+        }
+    }
     if let Some(f) = floor {
         for b in 0..model.bodies.len() {
             let Shape::Sphere { radius } = model.bodies[b].shape;
@@ -344,7 +513,14 @@ fn draw_frame<DB: DrawingBackend>(
             ))
             .map_err(e)?;
         }
-        if model.bodies.len() <= 12 {
+    }
+    // Names after every sphere, so that a nearer sphere does not cover a
+    // farther one's name.
+    if model.bodies.len() <= 12 {
+        for b in 0..model.bodies.len() {
+            let Shape::Sphere { radius } = model.bodies[b].shape;
+            let (x, y) = pix(&centre(b));
+            let rp = (radius * cam.scale).round().max(2.0) as i32;
             area.draw(&Text::new(
                 model.bodies[b].name.clone(),
                 (x + rp + 3, y - rp),
@@ -411,7 +587,7 @@ fn draw_frame<DB: DrawingBackend>(
                 if on_screen < 1e-3 {
                     continue;
                 }
-                let red = RGBColor(210, 30, 30);
+                let red = RGBColor(ARROW_RED[0], ARROW_RED[1], ARROW_RED[2]);
                 super::thick_path(area, &[(tx, ty), (hx, hy)], red, 2).map_err(e)?;
                 // The head: two short strokes back from the tip.
                 let (dx, dy) = ((hx - tx) as f64, (hy - ty) as f64);
@@ -434,13 +610,16 @@ fn draw_frame<DB: DrawingBackend>(
     if let Some((t, step, status)) = &run.first_failure {
         if run.t[i] >= *t {
             area.draw(&Rectangle::new(
-                [(0, HEIGHT as i32 - 34), (WIDTH as i32, HEIGHT as i32)],
-                RGBColor(200, 0, 0).filled(),
+                [
+                    (0, cam.height as i32 - 34),
+                    (cam.width as i32, cam.height as i32),
+                ],
+                RGBColor(BANNER_RED[0], BANNER_RED[1], BANNER_RED[2]).filled(),
             ))
             .map_err(e)?;
             area.draw(&Text::new(
                 format!("step {step} failed: {status}; the state stays as it was"),
-                (12, HEIGHT as i32 - 28),
+                (12, cam.height as i32 - 28),
                 (FONT, 18).into_font().color(&WHITE),
             ))
             .map_err(e)?;
@@ -462,26 +641,53 @@ pub fn gif(
     run: &RunData,
     path: &Path,
 ) -> Result<usize, PlotError> {
-    gif_at(model, camera, run, path, FPS)
+    gif_at(model, camera, run, path, FPS, (WIDTH, HEIGHT))
 }
 
-/// [`gif`] at `fps` frames per simulated second.
+/// [`gif`] at `fps` frames per simulated second, `size` pixels.
 pub fn gif_at(
     model: &Model,
     camera: Option<&cosim_shared::CameraDesc>,
     run: &RunData,
     path: &Path,
     fps: f64,
+    size: (u32, u32),
 ) -> Result<usize, PlotError> {
-    let cam = Camera::frame(model, camera, run);
+    let cam = Camera::frame_sized(model, camera, run, size);
     let (frames, delay) = frames_at(run, fps);
     let fail = |m: String| PlotError::Draw(format!("{}: {m}", path.display()));
-    let area = BitMapBackend::gif(path, (WIDTH, HEIGHT), delay)
-        .map_err(|e| fail(e.to_string()))?
-        .into_drawing_area();
-    for &i in &frames {
+    let mut rgb = vec![0u8; 3 * size.0 as usize * size.1 as usize];
+    let render = |i: usize, rgb: &mut Vec<u8>| -> Result<(), PlotError> {
+        let area = BitMapBackend::with_buffer(rgb, size).into_drawing_area();
         draw_frame(&area, model, run, &cam, i).map_err(fail)?;
-        area.present().map_err(|e| fail(e.to_string()))?;
+        area.present().map_err(|e| fail(e.to_string()))
+    };
+    // The palette from up to eight frames spread over the run (the
+    // first, with every plane and body, among them).
+    let mut samples = Vec::new();
+    let picks = frames.len().min(8);
+    for k in 0..picks {
+        let i = frames[k * (frames.len() - 1) / picks.saturating_sub(1).max(1)];
+        render(i, &mut rgb)?;
+        samples.push(rgb.clone());
+    }
+    // Colours drawn exactly: the background, text, the arrows' and the
+    // banner's reds, and the bodies' own.
+    let mut fixed = vec![
+        [250, 250, 248],
+        [0, 0, 0],
+        [255, 255, 255],
+        ARROW_RED,
+        BANNER_RED,
+    ];
+    fixed.extend((0..model.bodies.len().min(10)).map(|b| {
+        let c = color(b);
+        [c.0, c.1, c.2]
+    }));
+    let mut out = GifWriter::create(path, size, delay, &fixed, &samples).map_err(fail)?;
+    for &i in &frames {
+        render(i, &mut rgb)?;
+        out.frame(&rgb).map_err(fail)?;
     }
     Ok(frames.len())
 }
@@ -495,15 +701,16 @@ pub fn stills(
     dir: &Path,
     stem: &str,
     count: usize,
+    size: (u32, u32),
 ) -> Result<Vec<std::path::PathBuf>, PlotError> {
-    let cam = Camera::frame(model, camera, run);
+    let cam = Camera::frame_sized(model, camera, run, size);
     let (frames, _) = frames(run);
     let mut out = Vec::new();
     for k in 0..count {
         let i = frames[(k * (frames.len() - 1)) / count.saturating_sub(1).max(1)];
         let path = dir.join(format!("{stem}_{k}.png"));
         {
-            let area = BitMapBackend::new(&path, (WIDTH, HEIGHT)).into_drawing_area();
+            let area = BitMapBackend::new(&path, size).into_drawing_area();
             let fail = |m: String| PlotError::Draw(format!("{}: {m}", path.display()));
             draw_frame(&area, model, run, &cam, i).map_err(fail)?;
             area.present().map_err(|e| fail(e.to_string()))?;
@@ -511,4 +718,57 @@ pub fn stills(
         out.push(path);
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn camera() -> Camera {
+        Camera {
+            target: Vector3::zeros(),
+            right: Vector3::x(),
+            up: Vector3::z(),
+            forward: Vector3::y(),
+            scale: 100.0,
+            width: 200,
+            height: 100,
+        }
+    }
+
+    #[test]
+    fn a_line_cut_to_the_image_keeps_its_direction() {
+        // From far left-below to far right-above, slope -1/2 in pixels.
+        let (a, b) = inside_image((-1000.0, 600.0), (1000.0, -400.0), &camera()).unwrap();
+        let slope = (b.1 - a.1) as f64 / (b.0 - a.0) as f64;
+        assert!((slope + 0.5).abs() < 0.02, "{a:?} {b:?}");
+        assert!(a.0 >= 0 && b.0 <= 199 && a.1 <= 99 && b.1 >= 0);
+        // Wholly outside: nothing.
+        assert!(inside_image((-10.0, -10.0), (300.0, -5.0), &camera()).is_none());
+    }
+
+    #[test]
+    fn a_polygon_cut_to_the_image_keeps_its_edges() {
+        // A triangle with a corner far outside: the cut polygon's points
+        // lie on its edges or the image's border, never at a clamped corner.
+        let tri = [(50.0, 50.0), (5000.0, 50.0), (50.0, -5000.0)];
+        let cut = polygon_in_image(&tri, &camera());
+        assert!(cut.len() >= 3);
+        for &(x, y) in &cut {
+            let on_border = x == 0 || x == 199 || y == 0 || y == 99;
+            let on_edge = y == 50 || x == 50;
+            assert!(on_border || on_edge, "({x}, {y})");
+            // Inside the triangle: right of x = 50, above y = 50.
+            assert!(x >= 50 && y <= 50, "({x}, {y})");
+        }
+        assert!(cut.contains(&(199, 50)) && cut.contains(&(50, 0)));
+    }
+
+    #[test]
+    fn grid_spacings_are_one_two_or_five_times_a_power_of_ten() {
+        assert_eq!(nice(0.13), 0.2);
+        assert_eq!(nice(0.3), 0.5);
+        assert_eq!(nice(0.7), 1.0);
+        assert!((nice(0.017) - 0.02).abs() < 1e-15);
+    }
 }

@@ -14,6 +14,14 @@ pub struct BodyTrack {
     pub rows: Vec<[f64; 13]>,
 }
 
+/// A joint's name and the bodies it ties (`world` for the world).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct JointEnds {
+    pub name: String,
+    pub body_a: String,
+    pub body_b: String,
+}
+
 /// Everything a figure or the animation needs.
 #[derive(Debug, Clone, Default)]
 pub struct RunData {
@@ -28,6 +36,9 @@ pub struct RunData {
     /// (index `step - 1`), `None` where the file has no row (the contact
     /// was not active, or the joint impulse zero).
     pub impulses: BTreeMap<(String, String), Vec<Option<[f64; 3]>>>,
+    /// The scene's joints (from `scene.toml`; none where it is missing or
+    /// does not parse, and then no joint angles are drawn).
+    pub joints: Vec<JointEnds>,
     /// The first step report whose status says it failed: its time, the
     /// step that failed (one past the state it left unchanged, which its
     /// row names) and status.
@@ -146,6 +157,17 @@ impl RunData {
                 .entry((cols[2].to_string(), cols[3].to_string()))
                 .or_insert_with(|| vec![None; nsteps]);
             series[step - 1] = Some(p);
+        }
+        if let Ok(scene) = cosim_shared::Scene::load(&dir.join("scene.toml")) {
+            data.joints = scene
+                .joints
+                .into_iter()
+                .map(|j| JointEnds {
+                    name: j.name,
+                    body_a: j.body_a,
+                    body_b: j.body_b,
+                })
+                .collect();
         }
         Ok(data)
     }

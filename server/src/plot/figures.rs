@@ -6,6 +6,7 @@
 
 use super::data::RunData;
 use super::{color, PlotError, FONT};
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -405,6 +406,89 @@ fn component_panels(run: &RunData, labels: &[&str], first: usize) -> Vec<Panel> 
         .collect()
 }
 
+/// The rotation vector equivalent to `v` (the same axis, the angle plus a
+/// whole number of turns) nearest `last`: a joint that keeps turning is
+/// drawn as one continuous curve, not one that jumps where its angle passes
+/// 180 degrees.
+fn unwrap(v: Vector3<f64>, last: &Vector3<f64>) -> Vector3<f64> {
+    let angle = v.norm();
+    if angle < 1e-12 {
+        // No axis to turn about: the nearest multiple of a turn about
+        // the last axis.
+        let l = last.norm();
+        if l < 1e-12 {
+            return v;
+        }
+        let turns = (l / std::f64::consts::TAU).round();
+        return last * (turns * std::f64::consts::TAU / l);
+    }
+    let axis = v / angle;
+    // The whole turns that bring the angle nearest the last along this axis.
+    let turns = ((axis.dot(last) - angle) / std::f64::consts::TAU).round();
+    [turns - 1.0, turns, turns + 1.0]
+        .into_iter()
+        .map(|n| axis * (angle + n * std::f64::consts::TAU))
+        .min_by(|x, y| (x - last).norm().total_cmp(&(y - last).norm()))
+        .unwrap_or(v)
+}
+
+/// Each joint's rotation since the start: `r(t) = rel(t) rel(0)^-1`,
+/// with `rel = q_a^-1 q_b` (body_b's orientation in body_a's frame; a
+/// world end has the identity), as a rotation vector in body_a's frame
+/// (axis times angle, in degrees, unwrapped to stay continuous: see
+/// [`unwrap`]): its three components and its angle. A spherical joint has no single angle; this
+/// is what MuJoCo's `mju_quat2Vel` gives for a ball joint's relative
+/// rotation, and a hinge's angle is the component along its axis.
+fn joint_angle_panels(run: &RunData) -> Vec<Panel> {
+    let orientation = |name: &str| -> Option<Option<usize>> {
+        if name == cosim_shared::scene::WORLD {
+            return Some(None);
+        }
+        run.bodies.iter().position(|b| b.name == name).map(Some)
+    };
+    let at = |b: Option<usize>, i: usize| {
+        b.map_or_else(UnitQuaternion::identity, |b| {
+            let r = &run.bodies[b].rows[i];
+            UnitQuaternion::from_quaternion(Quaternion::new(r[3], r[4], r[5], r[6]))
+        })
+    };
+    let mut series: [Vec<Series>; 4] = Default::default();
+    for (k, j) in run.joints.iter().enumerate() {
+        let (Some(a), Some(b)) = (orientation(&j.body_a), orientation(&j.body_b)) else {
+            continue;
+        };
+        if run.t.is_empty() {
+            continue;
+        }
+        let rel = |i: usize| at(a, i).inverse() * at(b, i);
+        let start = rel(0).inverse();
+        let mut last = Vector3::zeros();
+        let vectors: Vec<(f64, Vector3<f64>)> = (0..run.t.len())
+            .map(|i| {
+                last = unwrap((rel(i) * start).scaled_axis(), &last);
+                (run.t[i], last.map(f64::to_degrees))
+            })
+            .collect();
+        for (c, out) in series.iter_mut().enumerate() {
+            out.push(Series {
+                name: j.name.clone(),
+                color: color(k),
+                points: vectors
+                    .iter()
+                    .map(|(t, v)| (*t, if c < 3 { v[c] } else { v.norm() }))
+                    .collect(),
+                thin: false,
+            });
+        }
+    }
+    let labels = ["rx (deg)", "ry (deg)", "rz (deg)", "angle (deg)"];
+    labels
+        .iter()
+        .zip(series)
+        .map(|(label, s)| Panel::new(*label, s))
+        .collect()
+}
+
 /// Force series (N: impulse over the step / h) of one kind, one per
 /// contact or joint, with gaps where it was not active.
 fn force_series(run: &RunData, kind: &str, h: f64) -> Vec<Series> {
@@ -469,10 +553,11 @@ fn norm(p: &[f64; 3]) -> f64 {
 }
 
 /// Every figure's file stem, in drawing order.
-pub const STEMS: [&str; 11] = [
+pub const STEMS: [&str; 12] = [
     "positions",
     "velocities",
     "quaternions",
+    "joint_angles",
     "energy",
     "normal_forces",
     "friction_forces",
@@ -670,6 +755,11 @@ pub fn specs(run: &RunData) -> Vec<Spec> {
         "Orientation quaternions (scalar first)",
         component_panels(run, &["qw", "qx", "qy", "qz"], 3),
     );
+    put(
+        "joint_angles",
+        "Joint rotations since the start: body_b relative to body_a, a rotation vector in body_a's frame",
+        joint_angle_panels(run),
+    );
     // The midpoint total last and thin: it follows the end-of-step total
     // closely, and both stay visible.
     let energy = [
@@ -836,6 +926,79 @@ pub fn specs(run: &RunData) -> Vec<Spec> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_joint_angle_is_body_b_turning_relative_to_body_a_since_the_start() {
+        use super::super::data::{BodyTrack, JointEnds};
+        use nalgebra::Unit;
+        let turn = |axis: Vector3<f64>, deg: f64| {
+            UnitQuaternion::from_axis_angle(&Unit::new_normalize(axis), deg.to_radians())
+        };
+        let row = |q: UnitQuaternion<f64>| {
+            let mut r = [0.0; 13];
+            r[3..7].copy_from_slice(&[q.w, q.i, q.j, q.k]);
+            r
+        };
+        // Body a holds 40 deg about x; body b starts 10 deg about a's y
+        // and turns 30 deg about a's z.
+        let qa = turn(Vector3::x(), 40.0);
+        let b0 = qa * turn(Vector3::y(), 10.0);
+        let b1 = qa * turn(Vector3::z(), 30.0) * turn(Vector3::y(), 10.0);
+        let joint = |name: &str, a: &str| JointEnds {
+            name: name.into(),
+            body_a: a.into(),
+            body_b: "b".into(),
+        };
+        let run = RunData {
+            t: vec![0.0, 1.0],
+            bodies: vec![
+                BodyTrack {
+                    name: "a".into(),
+                    rows: vec![row(qa), row(qa)],
+                },
+                BodyTrack {
+                    name: "b".into(),
+                    rows: vec![row(b0), row(b1)],
+                },
+            ],
+            joints: vec![joint("ab", "a"), joint("wb", "world"), joint("gone", "c")],
+            ..Default::default()
+        };
+        let panels = joint_angle_panels(&run);
+        let value = |panel: usize, joint: usize| panels[panel].series[joint].points[1].1;
+        // In a's frame: 30 deg about z.
+        assert!(value(0, 0).abs() < 1e-9 && value(1, 0).abs() < 1e-9);
+        assert!((value(2, 0) - 30.0).abs() < 1e-9);
+        assert!((value(3, 0) - 30.0).abs() < 1e-9);
+        // Against the world: 30 deg about a's z seen in the world frame.
+        let axis = qa * Vector3::z();
+        for c in 0..3 {
+            assert!((value(c, 1) - 30.0 * axis[c]).abs() < 1e-9, "{c}");
+        }
+        // A joint naming no body of the run is left out; at t = 0 nothing turned.
+        assert_eq!(panels[0].series.len(), 2);
+        assert!(panels
+            .iter()
+            .all(|p| p.series.iter().all(|s| s.points[0].1.abs() < 1e-12)));
+    }
+
+    #[test]
+    fn a_joint_that_keeps_turning_is_one_continuous_curve() {
+        // 170 then 190 deg about z: the rotation vector of the second is
+        // 170 deg about -z; unwrapped, 190 about +z.
+        let last = Vector3::new(0.0, 0.0, 170f64.to_radians());
+        let v = Vector3::new(0.0, 0.0, -170f64.to_radians());
+        let u = unwrap(v, &last);
+        assert!((u.z.to_degrees() - 190.0).abs() < 1e-9, "{u}");
+        // Two full turns on: 725 deg, from 5 deg about z.
+        let last = Vector3::new(0.0, 0.0, 720f64.to_radians());
+        let u = unwrap(Vector3::new(0.0, 0.0, 5f64.to_radians()), &last);
+        assert!((u.z.to_degrees() - 725.0).abs() < 1e-9, "{u}");
+        // Ten turns on, from -175 deg read as 175 about -z: 3,425 deg.
+        let last = Vector3::new(0.0, 0.0, 3420f64.to_radians());
+        let u = unwrap(Vector3::new(0.0, 0.0, -175f64.to_radians()), &last);
+        assert!((u.z.to_degrees() - 3425.0).abs() < 1e-9, "{u}");
+    }
 
     #[test]
     fn ticks_read_as_people_write_them() {

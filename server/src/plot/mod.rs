@@ -3,9 +3,11 @@
 pub mod animation;
 pub mod data;
 pub mod figures;
+pub mod gif;
 
 use crate::engine::model::Shape;
 use crate::engine::Model;
+use cosim_foxglove::draw::Other;
 use cosim_shared::Scene;
 use data::RunData;
 use nalgebra::Vector3;
@@ -66,12 +68,11 @@ pub fn contact_point(model: &Model, run: &RunData, i: usize, name: &str) -> Opti
         let r = &run.bodies[k].rows[i];
         Vector3::new(r[0], r[1], r[2])
     };
-    let ca = at(ia);
-    if let Some(ib) = index(b) {
-        return Some(ca + (at(ib) - ca).normalize() * radius);
-    }
-    let plane = model.planes.iter().find(|p| p.name == b)?;
-    Some(ca - plane.normal * radius)
+    let other = match index(b) {
+        Some(ib) => Other::Body(at(ib)),
+        None => Other::Plane(model.planes.iter().find(|p| p.name == b)?.normal),
+    };
+    Some(cosim_foxglove::draw::contact_point(at(ia), radius, other))
 }
 
 /// A log-log chart as the benchmarks draw them.
@@ -121,21 +122,11 @@ pub fn log_log<'a, 'b>(
     Ok(chart)
 }
 
-/// Colour `i` of the palette (Tableau 10): bodies, contacts and joints.
+/// Colour `i` of the palette (Tableau 10): bodies, contacts and joints,
+/// the same as in the recordings and the live view.
 pub fn color(i: usize) -> RGBColor {
-    const PALETTE: [RGBColor; 10] = [
-        RGBColor(31, 119, 180),
-        RGBColor(255, 127, 14),
-        RGBColor(44, 160, 44),
-        RGBColor(214, 39, 40),
-        RGBColor(148, 103, 189),
-        RGBColor(140, 86, 75),
-        RGBColor(227, 119, 194),
-        RGBColor(127, 127, 127),
-        RGBColor(188, 189, 34),
-        RGBColor(23, 190, 207),
-    ];
-    PALETTE[i % PALETTE.len()]
+    let [r, g, b] = cosim_foxglove::palette::color(i);
+    RGBColor(r, g, b)
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -172,6 +163,9 @@ pub struct PlotOptions {
     /// Frames per simulated second of the animation (default
     /// `animation::FPS`).
     pub fps: Option<f64>,
+    /// The animation's size in pixels (default `animation::WIDTH` x
+    /// `animation::HEIGHT`).
+    pub gif_size: Option<(u32, u32)>,
     /// Only these bodies (and their contacts) in the figures.
     pub bodies: Option<Vec<String>>,
 }
@@ -255,6 +249,9 @@ pub fn render(dir: &Path, opts: &PlotOptions) -> Result<Vec<PathBuf>, PlotError>
     }
     let run = full;
     if opts.animation || opts.stills > 0 {
+        let gif_size = opts
+            .gif_size
+            .unwrap_or((animation::WIDTH, animation::HEIGHT));
         let scene =
             Scene::load(&dir.join("scene.toml")).map_err(|e| PlotError::Read(e.to_string()))?;
         let model = Model::from_scene(&scene);
@@ -268,7 +265,7 @@ pub fn render(dir: &Path, opts: &PlotOptions) -> Result<Vec<PathBuf>, PlotError>
         if opts.animation {
             let path = dir.join("animation.gif");
             let fps = opts.fps.unwrap_or(animation::FPS);
-            animation::gif_at(&model, scene.camera.as_ref(), &run, &path, fps)?;
+            animation::gif_at(&model, scene.camera.as_ref(), &run, &path, fps, gif_size)?;
             files.push(path);
         }
         if opts.stills > 0 {
@@ -279,6 +276,7 @@ pub fn render(dir: &Path, opts: &PlotOptions) -> Result<Vec<PathBuf>, PlotError>
                 dir,
                 "frame",
                 opts.stills,
+                gif_size,
             )?);
         }
     }

@@ -5,8 +5,9 @@
 //! - lockstep steps per second on the reference scene with 1, 2 and 4
 //!   controller processes in spin, block and hybrid waiting;
 //! - a monitor's cost, from windows of one run with it attached and
-//!   detached ([`monitor_windows`]), and a recorder process reading every
-//!   frame;
+//!   detached ([`monitor_windows`]), the same for the live view (`cosim
+//!   view` serving a Foxglove client), and a recorder process reading
+//!   every frame;
 //! - the baseline: the same lockstep over a TCP loopback socket, what a
 //!   socket-based (gRPC-style) co-simulation pays at the least.
 //!
@@ -283,6 +284,8 @@ fn median(v: &mut [f64]) -> f64 {
 
 /// One lockstep measurement.
 struct Lockstep {
+    /// The server name of the run.
+    name: String,
     steps_per_s: f64,
     round_trip_us: f64,
     compute_us: f64,
@@ -336,7 +339,7 @@ fn lockstep_of(
         // The loop alone: the files are a cost of their own.
         out: None,
         quiet: true,
-        timeline: sidecar == Some("monitor-toggle"),
+        timeline: sidecar.is_some_and(|r| r.ends_with("-toggle")),
         publish_every: None,
     };
     let server = std::thread::spawn(move || serve(&scene, opts).map_err(|e| e.to_string()));
@@ -372,6 +375,7 @@ fn lockstep_of(
     let prepare_mean = c.prepare.mean().unwrap_or(nan);
     let m = |h: &super::stats::Histogram| h.mean().unwrap_or(nan);
     Ok(Lockstep {
+        name,
         median_step_us: c.phases.step_wall.quantile(0.5).unwrap_or(nan),
         phases: [
             m(&c.phases.boundary),
@@ -404,18 +408,23 @@ impl Lockstep {
     }
 }
 
-/// The server name of a lockstep run: unique per bench process and row.
+/// The server name of a lockstep run: unique per bench process and run
+/// (a run repeated under one name could meet the last one's services
+/// still being torn down: iceoryx2's `IsMarkedForDestruction`).
 fn run_name(controllers: usize, mode: WaitMode, sidecar: Option<&str>) -> String {
+    static RUNS: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+    let run = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     format!(
-        "bench-{}-{controllers}-{}-{}",
+        "bench-{}-{run}-{controllers}-{}-{}",
         std::process::id(),
         mode.as_str(),
         sidecar.unwrap_or("none")
     )
 }
 
-/// Where the toggling monitor writes its attached intervals (one line
-/// `start end`, seconds since the epoch, per interval).
+/// Where the toggling peer writes its windows (one line `start end
+/// idle_end` per attach, seconds since the epoch: attached from start to
+/// end, then detached and idle until idle_end).
 fn intervals_file(name: &str) -> std::path::PathBuf {
     std::env::temp_dir().join(format!("cosim-bench-{name}.intervals"))
 }
@@ -435,17 +444,26 @@ const MARGIN: f64 = 0.02;
 /// adjacent windows of 0.1 s share most of it (0.3 s windows gave a third
 /// of the pairs and wider quartiles). Returns the ratios, attached over
 /// detached, of each pair: steps per second, and median step.
-fn monitor_windows(mode: WaitMode, steps: u64) -> Result<(Vec<f64>, Vec<f64>), BoxError> {
-    let l = lockstep(1, mode, steps, Some("monitor-toggle"))?;
-    let file = intervals_file(&run_name(1, mode, Some("monitor-toggle")));
+/// `role` is the toggling peer: `monitor-toggle` (`cosim monitor`) or
+/// `view-toggle` (`cosim view` with a Foxglove client subscribed).
+fn monitor_windows(
+    mode: WaitMode,
+    steps: u64,
+    role: &str,
+) -> Result<(Vec<f64>, Vec<f64>), BoxError> {
+    let l = lockstep(1, mode, steps, Some(role))?;
+    let file = intervals_file(&l.name);
     let text = std::fs::read_to_string(&file).unwrap_or_default();
     let _ = std::fs::remove_file(&file);
-    let attached: Vec<(f64, f64)> = text
+    // Per line: attached from a to b, then detached from b to c (the peer
+    // idle; its next attach, which asks the server for the scene or maps
+    // a new port, comes after c).
+    let windows: Vec<(f64, f64, f64)> = text
         .lines()
         .filter_map(|l| {
             let mut it = l.split_whitespace().map(|x| x.parse::<f64>());
-            match (it.next(), it.next()) {
-                (Some(Ok(a)), Some(Ok(b))) => Some((a, b)),
+            match (it.next(), it.next(), it.next()) {
+                (Some(Ok(a)), Some(Ok(b)), Some(Ok(c))) => Some((a, b, c)),
                 _ => None,
             }
         })
@@ -462,9 +480,8 @@ fn monitor_windows(mode: WaitMode, steps: u64) -> Result<(Vec<f64>, Vec<f64>), B
         Some(((hi - lo) as f64 / (b - a), median(&mut walls)))
     };
     let (mut rate, mut step) = (Vec::new(), Vec::new());
-    for w in attached.windows(2) {
-        // Attached w[0], then detached until w[1] starts.
-        if let (Some(on), Some(off)) = (window(w[0].0, w[0].1), window(w[0].1, w[1].0)) {
+    for &(a, b, c) in &windows {
+        if let (Some(on), Some(off)) = (window(a, b), window(b, c)) {
             rate.push(on.0 / off.0);
             step.push(on.1 / off.1);
         }
@@ -583,9 +600,54 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
                     }
                 }
                 drop(m);
-                writeln!(out, "{start} {}", epoch_seconds())?;
-                out.flush()?;
+                let end = epoch_seconds();
                 std::thread::sleep(Duration::from_secs_f64(WINDOW));
+                writeln!(out, "{start} {end} {}", epoch_seconds())?;
+                out.flush()?;
+            }
+        }
+        // As `cosim view --rate 30` with a Foxglove client subscribed to
+        // every channel, for a window, detached for the next, as
+        // `monitor-toggle`. The window starts once the view has its
+        // monitor and listens (its scene request to the server is before).
+        "view-toggle" => {
+            let mut out = std::fs::File::create(intervals_file(name))?;
+            loop {
+                // The server may not be up yet; once it is gone, done.
+                let up = cosim_client::when_up(Duration::from_secs(5), || {
+                    cosim_client::Connection::connect(name)
+                });
+                if up.is_err() {
+                    return Ok(());
+                }
+                let (tx, rx) = std::sync::mpsc::channel();
+                let vname = name.to_string();
+                let view = std::thread::spawn(move || {
+                    let opts = cosim_client::view::ViewOptions {
+                        listen: "127.0.0.1:0".into(),
+                        rate: 30.0,
+                        seconds: Some(WINDOW),
+                    };
+                    cosim_client::view::view(&vname, &opts, |a| {
+                        let _ = tx.send(a);
+                    })
+                    .map_err(|e| e.to_string())
+                });
+                // No address: the server is gone (the view failed).
+                let Ok(addr) = rx.recv_timeout(Duration::from_secs(5)) else {
+                    return Ok(());
+                };
+                let start = epoch_seconds();
+                let client = std::thread::spawn(move || foxglove_client(addr));
+                let done = view.join().map_err(|_| "the view panicked")?;
+                let end = epoch_seconds();
+                let _ = client.join();
+                if done.is_err() {
+                    return Ok(());
+                }
+                std::thread::sleep(Duration::from_secs_f64(WINDOW));
+                writeln!(out, "{start} {end} {}", epoch_seconds())?;
+                out.flush()?;
             }
         }
         "tcp" => {
@@ -604,6 +666,38 @@ pub fn run_peer(role: &str, name: &str, mode: WaitMode) -> Result<(), BoxError> 
         }
         other => Err(format!("unknown bench peer role {other:?}").into()),
     }
+}
+
+/// A Foxglove client of `cosim view` at `addr`: subscribes to every
+/// channel advertised and reads until the view closes the connection.
+fn foxglove_client(addr: std::net::SocketAddr) -> Result<(), String> {
+    use tungstenite::client::IntoClientRequest;
+    let mut req = format!("ws://{addr}")
+        .into_client_request()
+        .map_err(|e| e.to_string())?;
+    req.headers_mut().insert(
+        "Sec-WebSocket-Protocol",
+        tungstenite::http::HeaderValue::from_static(cosim_foxglove::live::SUBPROTOCOL),
+    );
+    let (mut ws, _) = tungstenite::connect(req).map_err(|e| e.to_string())?;
+    while let Ok(m) = ws.read() {
+        let tungstenite::Message::Text(t) = m else {
+            continue;
+        };
+        let v: serde_json::Value = serde_json::from_str(t.as_str()).map_err(|e| e.to_string())?;
+        if v["op"] == "advertise" {
+            let subs: Vec<serde_json::Value> = v["channels"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .map(|c| serde_json::json!({ "id": c["id"], "channelId": c["id"] }))
+                .collect();
+            let msg = serde_json::json!({ "op": "subscribe", "subscriptions": subs });
+            ws.send(tungstenite::Message::text(msg.to_string()))
+                .map_err(|e| e.to_string())?;
+        }
+    }
+    Ok(())
 }
 
 /// Runs every measurement and prints the table (Markdown).
@@ -758,8 +852,27 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
     // The monitor's cost is a few percent at most, below this machine's
     // noise between two runs: measured inside one run of 50 times the
     // steps (see `monitor_windows`).
-    for mode in [WaitMode::Spin, WaitMode::Hybrid] {
-        let (mut rate, mut step) = monitor_windows(mode, 50 * steps)?;
+    // The live view (issue 16, point 8) in the spinning loop alone, the
+    // one a monitor could slow most.
+    let toggles = [
+        (
+            WaitMode::Spin,
+            "monitor-toggle",
+            "a monitor process (cosim monitor, newest frame at 10 Hz)",
+        ),
+        (
+            WaitMode::Hybrid,
+            "monitor-toggle",
+            "a monitor process (cosim monitor, newest frame at 10 Hz)",
+        ),
+        (
+            WaitMode::Spin,
+            "view-toggle",
+            "a view process (cosim view --rate 30, a Foxglove client subscribed to every channel)",
+        ),
+    ];
+    for (mode, role, what) in toggles {
+        let (mut rate, mut step) = monitor_windows(mode, 50 * steps, role)?;
         let pct = |v: &mut Vec<f64>| {
             if v.is_empty() {
                 return "no windows".to_string();
@@ -774,7 +887,7 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
             )
         };
         out.push_str(&format!(
-            "| lockstep, 1 controller, {}: a monitor process (cosim monitor, newest frame at 10 Hz) attached against detached, alternate {WINDOW} s windows of one run, median ratio over {} pairs of windows | steps/s {}; median step {} | - | - | - |\n",
+            "| lockstep, 1 controller, {}: {what} attached against detached, alternate {WINDOW} s windows of one run, median ratio over {} pairs of windows | steps/s {}; median step {} | - | - | - |\n",
             mode.as_str(),
             rate.len(),
             pct(&mut rate),

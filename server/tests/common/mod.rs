@@ -23,3 +23,26 @@ impl Drop for TempDir {
         let _ = std::fs::remove_dir_all(&self.0);
     }
 }
+
+/// An MCAP recording read with the format's reference reader (the Python
+/// `mcap` package, through `read_mcap.py`): per topic its schema,
+/// encodings and message count, the `/scene` entities at `log_time` (ns)
+/// and the `/forces/normal/CONTACT` message then.
+// Not every test binary that shares this module reads recordings.
+#[allow(dead_code)]
+pub fn read_mcap(path: &Path, log_time: u64, contact: &str) -> serde_json::Value {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/read_mcap.py");
+    let read = std::process::Command::new("python3")
+        .arg(script)
+        .arg(path)
+        .arg(log_time.to_string())
+        .arg(contact)
+        .output()
+        .expect("python3");
+    assert!(
+        read.status.success(),
+        "{}",
+        String::from_utf8_lossy(&read.stderr)
+    );
+    serde_json::from_slice(&read.stdout).expect("read_mcap.py prints JSON")
+}

@@ -1,0 +1,230 @@
+//! `cosim view`: a running server's state, live in Foxglove.
+//!
+//! A monitor ([`Monitor::polling`]: it reads the newest frame at the
+//! view's rate and adds nothing to the server's step, not even an event)
+//! that serves the Foxglove WebSocket protocol ([`cosim_foxglove::live`]).
+//! In Foxglove: Open connection, Foxglove WebSocket, `ws://HOST:PORT`.
+//!
+//! Channels, each at most once per newest frame and at most `rate` times
+//! a second (a state frame comes every step; a display needs far fewer):
+//! - `/scene` (`foxglove.SceneUpdate`): spheres, planes, joint links and
+//!   the last step's normal contact forces as arrows, drawn as the
+//!   recordings draw them (`cosim-server run --mcap`);
+//! - `/tf` (`foxglove.FrameTransforms`): `world` to each body;
+//! - `/bodies/NAME` (`cosim.BodyState`);
+//! - `/solver` (`cosim.StepReport`): step, LCP size, residual, contacts,
+//!   controllers, solver status;
+//!
+//! and the simulated time (the protocol's time message). Messages are
+//! built only for channels someone subscribes to.
+
+use crate::{Connection, Monitor, StateFrame, STATUS_SHUTDOWN};
+use cosim_foxglove::draw::{self, Arrow, Drawing, Other, Pose};
+use cosim_foxglove::live::{Event, Live};
+use cosim_foxglove::{schema, Channel};
+use cosim_shared::wire::{BodyFrame, CONTACT_PLANE};
+use nalgebra::Vector3;
+use serde_json::{json, Value};
+use std::net::SocketAddr;
+use std::time::{Duration, Instant};
+
+/// How `cosim view` runs.
+#[derive(Debug, Clone)]
+pub struct ViewOptions {
+    /// Address to listen on, `HOST:PORT` (port 0: any free port).
+    pub listen: String,
+    /// Most frames per second sent to Foxglove.
+    pub rate: f64,
+    /// Stop after this many seconds of wall time.
+    pub seconds: Option<f64>,
+}
+
+/// What a view did, when it ends.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ViewStats {
+    /// Server frames drawn.
+    pub frames: u64,
+    /// Messages queued for clients, and dropped for slow ones.
+    pub sent: u64,
+    pub dropped: u64,
+}
+
+const SCENE: u32 = 1;
+const TF: u32 = 2;
+const SOLVER: u32 = 3;
+/// `/bodies/NAME` of body `i` is channel `BODIES + i`.
+const BODIES: u32 = 16;
+
+/// Serves server `name`'s state to Foxglove until the server stops, the
+/// time is up or the process is interrupted. `listening` is called once
+/// with the address bound (for a caller that chose port 0).
+pub fn view(
+    name: &str,
+    opts: &ViewOptions,
+    listening: impl FnOnce(SocketAddr),
+) -> Result<ViewStats, Box<dyn std::error::Error>> {
+    let conn = Connection::connect(name)?;
+    let scene = cosim_shared::Scene::parse(&conn.scene_toml()?, "<server scene>")?;
+    let drawing = Drawing::new(&scene);
+    let mut channels = vec![
+        Channel {
+            id: SCENE,
+            topic: "/scene".into(),
+            schema: schema::scene_update(),
+        },
+        Channel {
+            id: TF,
+            topic: "/tf".into(),
+            schema: schema::frame_transforms(),
+        },
+        Channel {
+            id: SOLVER,
+            topic: "/solver".into(),
+            schema: schema::step_report(&SOLVER_FIELDS),
+        },
+    ];
+    for (i, b) in drawing.bodies().iter().enumerate() {
+        channels.push(Channel {
+            id: BODIES + i as u32,
+            topic: format!("/bodies/{b}"),
+            schema: schema::body_state(),
+        });
+    }
+    let mut live = Live::bind(opts.listen.as_str(), &format!("cosim {name}"), channels)?;
+    let monitor = Monitor::polling(name)?;
+    listening(live.local_addr()?);
+    let period = Duration::from_secs_f64(1.0 / opts.rate.max(0.1));
+    let start = Instant::now();
+    let mut last_sequence = 0;
+    let mut last_alive_check = Instant::now();
+    let mut stats = ViewStats::default();
+    loop {
+        for e in live.poll() {
+            match e {
+                Event::Connected(p) => eprintln!("cosim view: Foxglove client {p} connected"),
+                Event::Disconnected(p) => eprintln!("cosim view: client {p} left"),
+                Event::Refused(p, why) => eprintln!("cosim view: refused {p}: {why}"),
+                Event::BadRequest(p, why) => eprintln!("cosim view: client {p}: {why}"),
+            }
+        }
+        if let Some(f) = monitor.latest()? {
+            if f.sequence != last_sequence {
+                last_sequence = f.sequence;
+                stats.frames += 1;
+                send(&mut live, &drawing, &f);
+                if f.status & STATUS_SHUTDOWN != 0 {
+                    break;
+                }
+            }
+        }
+        if opts
+            .seconds
+            .is_some_and(|s| start.elapsed().as_secs_f64() > s)
+        {
+            break;
+        }
+        if last_alive_check.elapsed() > Duration::from_secs(1) {
+            last_alive_check = Instant::now();
+            if !conn.server_alive() {
+                eprintln!("cosim view: the server '{name}' is gone");
+                break;
+            }
+        }
+        match monitor.node().wait(period) {
+            Ok(()) => {}
+            // SIGINT or SIGTERM: the view ends like the server's monitors.
+            Err(_) => break,
+        }
+    }
+    stats.sent = live.sent();
+    stats.dropped = live.dropped();
+    Ok(stats)
+}
+
+/// The numeric fields of `/solver`.
+pub(crate) const SOLVER_FIELDS: [&str; 7] = [
+    "step",
+    "sim_time",
+    "lcp_size",
+    "residual",
+    "contacts",
+    "controllers",
+    "solver_status",
+];
+
+/// One frame to the channels someone subscribes to.
+fn send(live: &mut Live, drawing: &Drawing, f: &StateFrame) {
+    let t = f.sim_time;
+    let ns = draw::nanos(t);
+    live.time(ns);
+    let poses = poses(f);
+    if live.subscribed(SCENE) {
+        let msg = scene_message(drawing, f, &poses);
+        live.publish(SCENE, ns, msg.to_string().as_bytes());
+    }
+    if live.subscribed(TF) {
+        let msg = drawing.frame_transforms(t, &poses);
+        live.publish(TF, ns, msg.to_string().as_bytes());
+    }
+    if live.subscribed(SOLVER) {
+        live.publish(SOLVER, ns, solver_message(f).to_string().as_bytes());
+    }
+    for (i, b) in f.bodies().iter().enumerate() {
+        let channel = BODIES + i as u32;
+        if live.subscribed(channel) {
+            let msg = draw::body_state(&body_row(b));
+            live.publish(channel, ns, msg.to_string().as_bytes());
+        }
+    }
+}
+
+/// The frame's body poses.
+pub(crate) fn poses(f: &StateFrame) -> Vec<Pose> {
+    f.bodies()
+        .iter()
+        .map(|b| Pose::new(b.position, b.orientation))
+        .collect()
+}
+
+/// A body of a frame as the 13 numbers of a states.csv row.
+pub(crate) fn body_row(b: &BodyFrame) -> [f64; 13] {
+    let mut row = [0.0; 13];
+    row[0..3].copy_from_slice(&b.position);
+    row[3..7].copy_from_slice(&b.orientation);
+    row[7..10].copy_from_slice(&b.linear_velocity);
+    row[10..13].copy_from_slice(&b.angular_velocity);
+    row
+}
+
+/// `/solver`: what the frame's header says of the last step.
+pub(crate) fn solver_message(f: &StateFrame) -> Value {
+    json!({
+        "step": f.step, "sim_time": f.sim_time, "lcp_size": f.lcp_size,
+        "residual": f.residual, "contacts": f.contact_count,
+        "controllers": f.controller_count, "solver_status": f.solver_status
+    })
+}
+
+/// `/scene`: the frame drawn, with the last step's normal contact forces
+/// (impulse over h) as arrows at their points.
+pub(crate) fn scene_message(drawing: &Drawing, f: &StateFrame, poses: &[Pose]) -> Value {
+    let h = if f.dt > 0.0 { f.dt } else { 1.0 };
+    let arrows: Vec<Arrow> = f
+        .contacts()
+        .iter()
+        .filter_map(|c| {
+            let a = c.body_a as usize;
+            let centre = poses.get(a)?.position;
+            let other = if c.kind_b == CONTACT_PLANE {
+                Other::Plane(drawing.plane_normal(c.index_b as usize)?)
+            } else {
+                Other::Body(poses.get(c.index_b as usize)?.position)
+            };
+            Some(Arrow {
+                at: draw::contact_point(centre, drawing.radius(a)?, other),
+                force: Vector3::from(c.normal) / h,
+            })
+        })
+        .collect();
+    drawing.scene_update(f.sim_time, poses, &arrows)
+}
