@@ -2059,6 +2059,35 @@ fn the_live_view_serves_foxglove_the_servers_states() {
     let bad = r#"{"op":"subscribe","subscriptions":[{"id":7,"channelId":999}]}"#;
     ws.send(tungstenite::Message::text(bad)).unwrap();
 
+    // Foxglove's own client of the protocol (@foxglove/ws-protocol under
+    // Node.js, installed by .ci/run) beside ours.
+    let client_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/foxglove_client");
+    let mut node = Proc(
+        Command::new("node")
+            .arg(client_dir.join("client.mjs"))
+            .arg(&url)
+            .current_dir(&client_dir)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("node (Node.js, with the machine)"),
+    );
+    let mut node_lines =
+        std::io::BufRead::lines(std::io::BufReader::new(node.0.stdout.take().unwrap()));
+    let mut node_line = || -> String {
+        match node_lines.next() {
+            Some(Ok(l)) => l,
+            _ => {
+                let mut err = String::new();
+                if let Some(mut e) = node.0.stderr.take() {
+                    let _ = std::io::Read::read_to_string(&mut e, &mut err);
+                }
+                panic!("Foxglove's client ended early (npm ci --prefix server/tests/foxglove_client?): {err}")
+            }
+        }
+    };
+    assert_eq!(node_line(), "subscribed");
+
     // The controller joins once the view serves: the states it drives
     // are the ones the view must show.
     let cname = name.clone();
@@ -2147,4 +2176,38 @@ fn the_live_view_serves_foxglove_the_servers_states() {
     for (t, msg) in &bodies {
         assert!(close(xyz(&msg["position"]), at(&upper, *t)), "t {t}: {msg}");
     }
+
+    // What Foxglove's client read: the server's name and capabilities,
+    // every channel with its schema name, messages on each, the time, no
+    // error; its last body state is one the server wrote.
+    let theirs: serde_json::Value = serde_json::from_str(&node_line()).expect("its JSON line");
+    assert_eq!(theirs["errors"], serde_json::json!([]), "{theirs}");
+    assert!(theirs["serverInfo"]["capabilities"]
+        .as_array()
+        .unwrap()
+        .contains(&"time".into()));
+    let schema_of = |topic: &str| {
+        theirs["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["topic"] == topic)
+            .map(|c| c["schemaName"].clone())
+    };
+    assert_eq!(schema_of("/scene"), Some("foxglove.SceneUpdate".into()));
+    assert_eq!(schema_of("/tf"), Some("foxglove.FrameTransforms".into()));
+    assert_eq!(schema_of("/bodies/upper"), Some("cosim.BodyState".into()));
+    for topic in ["/scene", "/tf", "/solver", "/bodies/upper", "/bodies/lower"] {
+        assert!(
+            theirs["counts"][topic].as_u64() >= Some(5),
+            "{topic}: {theirs}"
+        );
+    }
+    assert!(theirs["times"].as_u64() >= Some(5));
+    let last = &theirs["last"]["/bodies/upper"];
+    let t: u64 = last["timestamp"].as_str().unwrap().parse().unwrap();
+    assert!(
+        close(xyz(&last["msg"]["position"]), at(&upper, t)),
+        "{last}"
+    );
 }
