@@ -18,6 +18,7 @@ pub mod fallback;
 pub mod integrate;
 pub mod island;
 pub mod iterative;
+pub mod joint;
 pub mod measure;
 pub mod mlcp;
 pub mod model;
@@ -883,7 +884,10 @@ impl Engine {
         // Filled below in the LCP's contact order, which is ascending id.
         self.state.warm_contacts.clear();
         for (j, joint) in self.model.joints.iter().enumerate() {
-            let p = Vector3::new(m.p_b[3 * j], m.p_b[3 * j + 1], m.p_b[3 * j + 2]);
+            // The anchor's force impulse (the joint's first three rows);
+            // a hinge's or fixed joint's torque rows are not reported.
+            let first = self.model.joint_start[j];
+            let p = Vector3::new(m.p_b[first], m.p_b[first + 1], m.p_b[first + 2]);
             let party = |a: Attachment| match a {
                 Attachment::World => Party::World,
                 Attachment::Body(i) => Party::Body(i),

@@ -434,17 +434,11 @@ impl Mlcp {
         self.friction_of.clear();
         self.mu.clear();
 
-        // Joint rows: psi_b = x_A + R_A a_A - x_B - R_B a_B, one row per axis.
+        // Joint rows (joint.rs): the anchors, then the rotation a hinge or
+        // a fixed joint holds.
+        let factor = p.joint_compliance.map_or(p.beta, |k| k.erp(p.h));
         for joint in &model.joints {
-            let (pa, ra) = anchor(joint.a, &joint.local_a, state);
-            let (pb, rb) = anchor(joint.b, &joint.local_b, state);
-            let psi = pa - pb;
-            let factor = p.joint_compliance.map_or(p.beta, |k| k.erp(p.h));
-            for k in 0..3 {
-                let row = Row::along(Vector3::ith(k, 1.0), ra, rb);
-                self.offset.push(factor * psi[k] / p.h);
-                self.rows.push(row);
-            }
+            crate::joint::push_rows(joint, state, factor, p.h, &mut self.rows, &mut self.offset);
         }
         self.nb = self.rows.len();
 

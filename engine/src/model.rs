@@ -56,10 +56,11 @@ pub enum Attachment {
     Body(usize),
 }
 
-/// Pins a point fixed in body A to a point fixed in body B (or the world):
-/// `psi_b = x_A + R_A a_A - x_B - R_B a_B = 0`.
+/// A joint: pins a point fixed in body A to a point fixed in body B (or
+/// the world), `psi_b = x_A + R_A a_A - x_B - R_B a_B = 0` (three rows),
+/// and constrains the relative rotation as `turning` says (joint.rs).
 #[derive(Debug, Clone)]
-pub struct SphericalJoint {
+pub struct Joint {
     pub name: String,
     pub a: Attachment,
     pub b: Attachment,
@@ -68,6 +69,32 @@ pub struct SphericalJoint {
     pub local_b: Vector3<f64>,
     /// Constant joint torque from the scene: the initial held input.
     pub torque: Vector3<f64>,
+    pub turning: Turning,
+}
+
+/// What a joint leaves of the relative rotation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Turning {
+    /// Spherical: every rotation is free.
+    Free,
+    /// Revolute: only about the hinge axis, a unit vector held in each
+    /// side's frame (A's and B's; a world direction for the world).
+    Axis { a: Vector3<f64>, b: Vector3<f64> },
+    /// Fixed: none. B's orientation is A's times `rel` (A's frame to B's,
+    /// as at t = 0).
+    Locked { rel: UnitQuaternion<f64> },
+}
+
+impl Joint {
+    /// Constraint rows: three for the anchor, plus two (hinge) or three
+    /// (fixed) on the rotation.
+    pub fn rows(&self) -> usize {
+        3 + match self.turning {
+            Turning::Free => 0,
+            Turning::Axis { .. } => 2,
+            Turning::Locked { .. } => 3,
+        }
+    }
 }
 
 /// Time-stepping parameters.
@@ -201,7 +228,10 @@ pub struct Model {
     pub name: String,
     pub bodies: Vec<Body>,
     pub planes: Vec<Plane>,
-    pub joints: Vec<SphericalJoint>,
+    pub joints: Vec<Joint>,
+    /// Where each joint's rows start in the joint block (one more entry:
+    /// the block's size).
+    pub joint_start: Vec<usize>,
     pub params: Params,
     pub initial: Vec<InitialBody>,
 }
@@ -280,28 +310,53 @@ impl Model {
                 .orientation
                 .inverse_transform_vector(&(anchor - initial[i].position)),
         };
-        let joints = scene
+        // A side's orientation at t = 0 (the world's: the identity).
+        let turned = |att: Attachment| match att {
+            Attachment::World => UnitQuaternion::identity(),
+            Attachment::Body(i) => initial[i].orientation,
+        };
+        let joints: Vec<Joint> = scene
             .joints
             .iter()
             .map(|j| {
                 let (a, b) = (find(&j.body_a), find(&j.body_b));
                 let anchor = v3(j.anchor);
-                SphericalJoint {
+                let turning = match j.kind {
+                    cosim_shared::JointKind::Spherical => Turning::Free,
+                    cosim_shared::JointKind::Revolute => {
+                        // Validated: finite and not zero.
+                        let axis = v3(j.axis.unwrap_or([0.0, 0.0, 1.0])).normalize();
+                        Turning::Axis {
+                            a: turned(a).inverse_transform_vector(&axis),
+                            b: turned(b).inverse_transform_vector(&axis),
+                        }
+                    }
+                    cosim_shared::JointKind::Fixed => Turning::Locked {
+                        rel: turned(a).inverse() * turned(b),
+                    },
+                };
+                Joint {
                     name: j.name.clone(),
                     a,
                     b,
                     local_a: local(a, anchor),
                     local_b: local(b, anchor),
                     torque: v3(j.torque),
+                    turning,
                 }
             })
             .collect();
+        let mut joint_start = vec![0];
+        for j in &joints {
+            joint_start.push(joint_start[joint_start.len() - 1] + j.rows());
+        }
         let s = &scene.sim;
         Model {
             name: scene.name().to_string(),
             bodies,
             planes,
             joints,
+            joint_start,
             params: Params {
                 h: s.dt,
                 gravity: v3(s.gravity),

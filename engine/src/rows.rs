@@ -72,6 +72,25 @@ impl Row {
         }
     }
 
+    /// A rotation row along the world direction `dir`: `[0 ; dir]` on A
+    /// and `-[0 ; dir]` on B, the relative angular velocity along `dir`
+    /// (a hinge's or a fixed joint's, joint.rs).
+    pub fn turning(dir: Vector3<f64>, a: Option<usize>, b: Option<usize>) -> Row {
+        let zero = Vector3::zeros();
+        Row {
+            a: a.map(|body| BodyJac {
+                body,
+                lin: zero,
+                ang: dir,
+            }),
+            b: b.map(|body| BodyJac {
+                body,
+                lin: zero,
+                ang: -dir,
+            }),
+        }
+    }
+
     /// A contact row along `dir` (the normal or a friction direction).
     pub fn contact(c: &Contact, dir: Vector3<f64>) -> Row {
         let g = &c.geom;

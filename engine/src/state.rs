@@ -23,8 +23,8 @@ pub struct State {
     /// Warm start of the iterative solver, part of the state so that a
     /// snapshot is complete and a restored PGS run repeats its bits: the
     /// last step's impulses of the contacts in its final LCP, sorted by
-    /// contact id (a contact not listed had none), and joint impulses (3
-    /// per joint). Sparse: a list of every potential contact held
+    /// contact id (a contact not listed had none), and joint impulses (a
+    /// joint's rows: `Model::joint_start`). Sparse: a list of every potential contact held
     /// N P + N (N - 1) / 2 entries, 16 MB per state at 1,000 spheres and
     /// 1.6 GB at 10,000 (issue 14, point 5).
     pub warm_contacts: Vec<WarmContact>,
@@ -88,7 +88,7 @@ impl State {
                 })
                 .collect(),
             warm_contacts: Vec::new(),
-            warm_joint: vec![0.0; 3 * model.joints.len()],
+            warm_joint: vec![0.0; model.joint_start[model.joints.len()]],
             warm_lcp: Vec::new(),
             warm_active: Vec::new(),
             rest: vec![0; model.bodies.len()],

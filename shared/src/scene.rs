@@ -353,10 +353,17 @@ pub struct PlaneDesc {
     pub restitution: f64,
 }
 
+/// What a joint leaves free between its two sides.
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum JointKind {
+    /// The anchor points stay together; every rotation is free (3 rows).
     Spherical,
+    /// A hinge: the anchors stay together and the bodies turn only about
+    /// `axis` (5 rows).
+    Revolute,
+    /// The two sides move as one (6 rows).
+    Fixed,
 }
 
 /// `[[joint]]`: a bilateral joint between two bodies or a body and the world.
@@ -371,9 +378,23 @@ pub struct JointDesc {
     pub body_b: String,
     /// World point at t = 0, fixed in both bodies from then on.
     pub anchor: [f64; 3],
+    /// `revolute`: the hinge axis, a world direction at t = 0, fixed in
+    /// both bodies from then on (any length but zero). Only for revolute.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis: Option<[f64; 3]>,
     /// Constant joint torque: `+torque` on body_b, `-torque` on body_a.
     #[serde(default)]
     pub torque: [f64; 3],
+}
+
+impl JointKind {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            JointKind::Spherical => "spherical",
+            JointKind::Revolute => "revolute",
+            JointKind::Fixed => "fixed",
+        }
+    }
 }
 
 /// The name a joint uses for the fixed world.
@@ -603,6 +624,34 @@ impl Scene {
             }
             finite3(&j.anchor).map_err(|m| err(f("anchor"), m))?;
             finite3(&j.torque).map_err(|m| err(f("torque"), m))?;
+            match (j.kind, j.axis) {
+                (JointKind::Revolute, None) => {
+                    return Err(err(
+                        f("axis"),
+                        "missing: a revolute joint needs its hinge axis".into(),
+                    ))
+                }
+                (JointKind::Revolute, Some(a)) => {
+                    finite3(&a).map_err(|m| err(f("axis"), m))?;
+                    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+                    if !(n > 1e-9 && n.is_finite()) {
+                        return Err(err(
+                            f("axis"),
+                            format!("= {a:?}: the axis needs a direction (not zero)"),
+                        ));
+                    }
+                }
+                (kind, Some(_)) => {
+                    return Err(err(
+                        f("axis"),
+                        format!(
+                            "only a revolute joint has an axis (this one is {})",
+                            kind.as_str()
+                        ),
+                    ))
+                }
+                (_, None) => {}
+            }
         }
         if let Some(c) = &self.compliance {
             for (what, spring) in [("contact", c.contact), ("joint", c.joint)] {

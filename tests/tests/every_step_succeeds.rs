@@ -9,10 +9,11 @@ use cosim_server::engine::{Engine, LadderCounts, Model};
 use cosim_shared::{Scene, SolverChoice};
 use cosim_tests::shipped_scene;
 
-const SHIPPED: [&str; 6] = [
+const SHIPPED: [&str; 7] = [
     "reference.toml",
     "friction.toml",
     "frictionless.toml",
+    "hinges.toml",
     "joint_torques.toml",
     "joints.toml",
     "restitution.toml",
@@ -45,6 +46,22 @@ fn run_all(text: &str, name: &str, solver: SolverChoice, steps: u64) -> LadderCo
         ladder.add(&r);
     }
     ladder
+}
+
+/// The list above is every scene in examples/scenes/.
+#[test]
+fn the_list_holds_every_shipped_scene() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/scenes");
+    let mut found: Vec<String> = std::fs::read_dir(&dir)
+        .expect("examples/scenes")
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".toml"))
+        .collect();
+    found.sort();
+    let mut listed: Vec<&str> = SHIPPED.to_vec();
+    listed.sort();
+    assert_eq!(found, listed);
 }
 
 #[test]

@@ -82,6 +82,30 @@ fn stepping_allocates_nothing_after_warm_up() {
     }
 }
 
+/// The same with a hinge and a fixed joint (their rotation rows) and a
+/// contact between a jointed body and a free one: the shipped hinges
+/// scene.
+#[test]
+fn hinges_and_fixed_joints_allocate_nothing_after_warm_up() {
+    let text = cosim_tests::shipped_scene("hinges.toml");
+    let scene = cosim_shared::Scene::parse(&text, "hinges.toml").expect("shipped scene");
+    for solver in [
+        cosim_shared::SolverChoice::Lemke,
+        cosim_shared::SolverChoice::Pgs,
+    ] {
+        let mut model = Model::from_scene(&scene);
+        model.params.solver = solver;
+        let (made, contacts) = second_pass_allocations(model, 3000);
+        assert!(contacts > 0, "the arm never touched anything");
+        assert_eq!(
+            made,
+            0,
+            "{}: {made} allocations after warm-up",
+            solver.as_str()
+        );
+    }
+}
+
 /// The same with the broad phase at work (issue 14, point 5): the gas of
 /// 64 spheres in a box lists a few of its 2,016 pairs each step, and its
 /// reach widens when a sphere is hit; a second pass over the same run
