@@ -466,7 +466,18 @@ fn joint_angle_panels(run: &RunData) -> Vec<Panel> {
         let vectors: Vec<(f64, Vector3<f64>)> = (0..run.t.len())
             .map(|i| {
                 last = unwrap((rel(i) * start).scaled_axis(), &last);
-                (run.t[i], last.map(f64::to_degrees))
+                // Below 1e-9 deg is the quaternion products' round-off
+                // (1e-16 relative): drawn as zero, not as an axis
+                // stretched over noise.
+                let deg = last.map(|r| {
+                    let d = r.to_degrees();
+                    if d.abs() < 1e-9 {
+                        0.0
+                    } else {
+                        d
+                    }
+                });
+                (run.t[i], deg)
             })
             .collect();
         for (c, out) in series.iter_mut().enumerate() {
