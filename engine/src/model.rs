@@ -97,6 +97,47 @@ impl Joint {
     }
 }
 
+/// The weld group of the world (see `Model::weld`).
+pub const WELDED_TO_WORLD: usize = usize::MAX;
+
+/// Each body's weld group: union-find over the fixed joints, the world as
+/// node `n`; a group is named by its smallest body, or [`WELDED_TO_WORLD`].
+fn weld_groups(n: usize, joints: &[Joint]) -> Vec<usize> {
+    let mut parent: Vec<usize> = (0..=n).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    let node = |a: Attachment| match a {
+        Attachment::World => n,
+        Attachment::Body(i) => i,
+    };
+    for j in joints
+        .iter()
+        .filter(|j| matches!(j.turning, Turning::Locked { .. }))
+    {
+        let (a, b) = (root(&mut parent, node(j.a)), root(&mut parent, node(j.b)));
+        // The larger index under the smaller: the world (n) never leads
+        // a group with a body, so a root of n means welded to the world.
+        let (lo, hi) = (a.min(b), a.max(b));
+        parent[hi] = lo;
+    }
+    let world = root(&mut parent, n);
+    (0..n)
+        .map(|i| {
+            let r = root(&mut parent, i);
+            if r == world {
+                WELDED_TO_WORLD
+            } else {
+                r
+            }
+        })
+        .collect()
+}
+
 /// Time-stepping parameters.
 #[derive(Debug, Clone)]
 pub struct Params {
@@ -232,6 +273,14 @@ pub struct Model {
     /// Where each joint's rows start in the joint block (one more entry:
     /// the block's size).
     pub joint_start: Vec<usize>,
+    /// Per body, its welded group: bodies tied by fixed joints share one,
+    /// and [`WELDED_TO_WORLD`] is the group of the world. Contacts inside
+    /// a group are not generated (collision/mod.rs): their rows would lie
+    /// in the span of the fixed joints' rows, a zero row of the reduced
+    /// LCP whose round-off can make it infeasible (found by the random
+    /// scenes: a sphere welded to the world resting on a plane). MuJoCo
+    /// excludes such pairs too.
+    pub weld: Vec<usize>,
     pub params: Params,
     pub initial: Vec<InitialBody>,
 }
@@ -346,6 +395,7 @@ impl Model {
                 }
             })
             .collect();
+        let weld = weld_groups(scene.bodies.len(), &joints);
         let mut joint_start = vec![0];
         for j in &joints {
             joint_start.push(joint_start[joint_start.len() - 1] + j.rows());
@@ -357,6 +407,7 @@ impl Model {
             planes,
             joints,
             joint_start,
+            weld,
             params: Params {
                 h: s.dt,
                 gravity: v3(s.gravity),

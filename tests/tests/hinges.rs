@@ -209,3 +209,38 @@ fn a_joints_axis_is_checked_and_named() {
         assert!(err.contains(expect), "{err}");
     }
 }
+
+/// A sphere welded to the world resting in a corner (found by the random
+/// scenes with joint kinds, seed 108): its contacts with the planes lay in
+/// the span of the fixed joint's rows, a zero row of the reduced LCP whose
+/// round-off made it infeasible (Lemke: ray termination at step 2). Bodies
+/// welded to each other or to the world no longer touch (`Model::weld`),
+/// as in MuJoCo; a welded pair with a free sphere between still does.
+#[test]
+fn a_body_welded_to_the_world_on_a_plane_steps_and_holds_still() {
+    let mut s = sim(1e-2, 200, [0.0, 0.0, -G]);
+    s += &sphere(
+        "held",
+        0.073,
+        2.0,
+        [-0.12, -0.065, 0.073],
+        [0.0; 3],
+        0.0,
+        0.0,
+    );
+    s += &sphere("free", 0.05, 1.0, [-0.12, -0.065, 0.3], [0.0; 3], 0.3, 0.0);
+    s += &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.3, 0.5);
+    s += &plane("wall", [1.0, 0.0, 0.0], [-0.2, 0.0, 0.0], 1.0, 0.5);
+    s += &joint_of("fixed", "weld", "world", "held", [-0.15, 0.027, 0.14], None);
+    let mut e = engine(&s);
+    let start = e.state().bodies[0].x;
+    let mut touched = false;
+    run(&mut e, 200, |e, r| {
+        assert!((e.state().bodies[0].x - start).norm() < 1e-9);
+        touched |= r.active_contacts > 0;
+    });
+    // The free sphere falls onto the held one and rests there.
+    let free = e.state().bodies[1].x;
+    assert!(touched);
+    assert!((free.z - (0.073 + 0.073 + 0.05)).abs() < 1e-3, "{free}");
+}

@@ -95,6 +95,10 @@ pub fn detect(
     let all = matches!(listing, Listing::All);
     for (i, body) in model.bodies.iter().enumerate() {
         let Shape::Sphere { radius } = body.shape;
+        // A body welded to the world is the world's (`Model::weld`).
+        if model.weld[i] == crate::model::WELDED_TO_WORLD {
+            continue;
+        }
         for (p, plane) in model.planes.iter().enumerate() {
             let g = sphere_plane(i, state.bodies[i].x, radius, p, plane);
             if all || g.gap <= listing.reach(i) + listing.margin() {
@@ -120,9 +124,11 @@ pub fn detect(
         )
     };
     let n = model.bodies.len();
+    // Bodies of one weld group do not touch (`Model::weld`).
+    let apart = |&(i, j): &(usize, usize)| model.weld[i] != model.weld[j];
     if all {
         for i in 0..n {
-            out.extend((i + 1..n).map(|j| pair((i, j))));
+            out.extend((i + 1..n).map(|j| (i, j)).filter(apart).map(pair));
         }
         return;
     }
@@ -136,5 +142,5 @@ pub fn detect(
         listing.margin(),
         pairs,
     );
-    out.extend(pairs.iter().map(|&p| pair(p)));
+    out.extend(pairs.iter().filter(|p| apart(p)).map(|&p| pair(p)));
 }
