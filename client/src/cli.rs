@@ -433,7 +433,7 @@ impl Recorder {
             return Ok(());
         };
         let f = nalgebra::Vector3::from(p) / h;
-        let msg = serde_json::json!({ "force": draw::vec3(&f), "magnitude": f.norm() });
+        let msg = draw::force_message(&f);
         rec.put(&format!("/forces/{kind}/{name}"), schema::force, t, &msg)
     }
 

@@ -76,6 +76,12 @@ impl Islands {
         self.tied.resize(bodies, false);
     }
 
+    /// The root of body `i`'s island in the last partition (a body in
+    /// none is its own root).
+    pub fn root_of(&mut self, i: usize) -> usize {
+        self.root(i)
+    }
+
     fn root(&mut self, mut i: usize) -> usize {
         while self.parent[i] as usize != i {
             let up = self.parent[self.parent[i] as usize];

@@ -100,40 +100,27 @@ impl Joint {
 /// The weld group of the world (see `Model::weld`).
 pub const WELDED_TO_WORLD: usize = usize::MAX;
 
-/// Each body's weld group: union-find over the fixed joints, the world as
-/// node `n`; a group is named by its smallest body, or [`WELDED_TO_WORLD`].
+/// Each body's weld group: the islands of the fixed joints
+/// (`Islands::partition`), the world as body `n`; a group is named by its
+/// island's root, or [`WELDED_TO_WORLD`].
 fn weld_groups(n: usize, joints: &[Joint]) -> Vec<usize> {
-    let mut parent: Vec<usize> = (0..=n).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
     let node = |a: Attachment| match a {
         Attachment::World => n,
         Attachment::Body(i) => i,
     };
-    for j in joints
-        .iter()
-        .filter(|j| matches!(j.turning, Turning::Locked { .. }))
-    {
-        let (a, b) = (root(&mut parent, node(j.a)), root(&mut parent, node(j.b)));
-        // The larger index under the smaller: the world (n) never leads
-        // a group with a body, so a root of n means welded to the world.
-        let (lo, hi) = (a.min(b), a.max(b));
-        parent[hi] = lo;
-    }
-    let world = root(&mut parent, n);
+    let mut islands = crate::island::Islands::default();
+    islands.partition(
+        n + 1,
+        joints
+            .iter()
+            .filter(|j| matches!(j.turning, Turning::Locked { .. }))
+            .map(|j| (node(j.a), Counterpart::Body(node(j.b)))),
+    );
+    let world = islands.root_of(n);
     (0..n)
-        .map(|i| {
-            let r = root(&mut parent, i);
-            if r == world {
-                WELDED_TO_WORLD
-            } else {
-                r
-            }
+        .map(|i| match islands.root_of(i) {
+            r if r == world => WELDED_TO_WORLD,
+            r => r,
         })
         .collect()
 }
@@ -273,7 +260,7 @@ pub struct Model {
     /// Where each joint's rows start in the joint block (one more entry:
     /// the block's size).
     pub joint_start: Vec<usize>,
-    /// Per body, its welded group: bodies tied by fixed joints share one,
+    /// Per body, its weld group: bodies tied by fixed joints share one,
     /// and [`WELDED_TO_WORLD`] is the group of the world. Contacts inside
     /// a group are not generated (collision/mod.rs): their rows would lie
     /// in the span of the fixed joints' rows, a zero row of the reduced

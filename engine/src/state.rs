@@ -24,9 +24,9 @@ pub struct State {
     /// snapshot is complete and a restored PGS run repeats its bits: the
     /// last step's impulses of the contacts in its final LCP, sorted by
     /// contact id (a contact not listed had none), and joint impulses (a
-    /// joint's rows: `Model::joint_start`). Sparse: a list of every potential contact held
-    /// N P + N (N - 1) / 2 entries, 16 MB per state at 1,000 spheres and
-    /// 1.6 GB at 10,000 (issue 14, point 5).
+    /// joint's rows: `Model::joint_start`). Sparse: a list of every
+    /// potential contact held N P + N (N - 1) / 2 entries, 16 MB per
+    /// state at 1,000 spheres and 1.6 GB at 10,000 (issue 14, point 5).
     pub warm_contacts: Vec<WarmContact>,
     pub warm_joint: Vec<f64>,
     /// Lemke's guess: the last step's final LCP layout (contact id, whether

@@ -76,7 +76,7 @@ pub fn time(t: f64) -> Value {
     json!({ "sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000 })
 }
 
-pub fn vec3(v: &Vector3<f64>) -> Value {
+fn vec3(v: &Vector3<f64>) -> Value {
     json!({ "x": v.x, "y": v.y, "z": v.z })
 }
 
@@ -294,6 +294,11 @@ pub fn body_state(row: &[f64; 13]) -> Value {
         "linear_velocity": { "x": r[7], "y": r[8], "z": r[9] },
         "angular_velocity": { "x": r[10], "y": r[11], "z": r[12] },
     })
+}
+
+/// A force (N) as `cosim.Force`: the vector and its magnitude.
+pub fn force_message(f: &Vector3<f64>) -> Value {
+    json!({ "force": vec3(f), "magnitude": f.norm() })
 }
 
 #[cfg(test)]

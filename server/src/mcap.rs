@@ -165,7 +165,7 @@ fn steps(rec: &mut Recording, run: &RunData) -> Result<(), McapError> {
                 continue;
             };
             let f = Vector3::from(*p) / h;
-            let msg = json!({ "force": draw::vec3(&f), "magnitude": f.norm() });
+            let msg = draw::force_message(&f);
             rec.put(&topic, schema::force, t, &msg)?;
         }
     }

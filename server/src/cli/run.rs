@@ -130,12 +130,9 @@ pub fn run(args: &RunArgs) -> ExitCode {
         }
     };
     if args.plot || args.animate {
-        let gif_size = match args.gif_size.as_deref().map(parse_size).transpose() {
+        let gif_size = match size_option("--gif-size", args.gif_size.as_deref()) {
             Ok(s) => s,
-            Err(m) => {
-                eprintln!("error: --gif-size {m}");
-                return ExitCode::from(EXIT_BAD_INPUT);
-            }
+            Err(code) => return code,
         };
         let opts = PlotOptions {
             figures: args.plot,
@@ -193,19 +190,13 @@ pub fn plot(args: &PlotArgs) -> ExitCode {
             Err(code) => code,
         };
     }
-    let size = match args.size.as_deref().map(parse_size).transpose() {
+    let size = match size_option("--size", args.size.as_deref()) {
         Ok(s) => s,
-        Err(m) => {
-            eprintln!("error: --size {m}");
-            return ExitCode::from(EXIT_BAD_INPUT);
-        }
+        Err(code) => return code,
     };
-    let gif_size = match args.gif_size.as_deref().map(parse_size).transpose() {
+    let gif_size = match size_option("--gif-size", args.gif_size.as_deref()) {
         Ok(s) => s,
-        Err(m) => {
-            eprintln!("error: --gif-size {m}");
-            return ExitCode::from(EXIT_BAD_INPUT);
-        }
+        Err(code) => return code,
     };
     let figure = plot::figures::Options {
         only: args
@@ -265,6 +256,15 @@ pub fn plot(args: &PlotArgs) -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(code) => code,
     }
+}
+
+/// An optional size option (`flag` WIDTHxHEIGHT): its value, or the exit
+/// code of bad input after saying why.
+fn size_option(flag: &str, value: Option<&str>) -> Result<Option<(u32, u32)>, ExitCode> {
+    value.map(parse_size).transpose().map_err(|m| {
+        eprintln!("error: {flag} {m}");
+        ExitCode::from(EXIT_BAD_INPUT)
+    })
 }
 
 /// `WIDTHxHEIGHT` in pixels, each 200 to 10,000.
