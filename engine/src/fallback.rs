@@ -8,7 +8,8 @@
 //!    normal offsets clipped at zero). Always solvable in exact arithmetic,
 //!    never adds energy (the derivation is at [`Offsets`]).
 //! 3. [`Fallback::Compliant`]: the relaxed problem on `M + eps I`, `eps`
-//!    the least of [`COMPLIANCE`] (relative to `max |M_ij|`) for which
+//!    the least of [`COMPLIANCE`] (relative to `max |M_ij|`, or the contact
+//!    rows' scale before the joints are eliminated, the larger) for which
 //!    Lemke's answer verifies against that regularised problem. `M + eps I`
 //!    is strictly copositive, so a solution exists for every `q`; `eps` is
 //!    a compliance of every row (m/s per N s), reported.
@@ -252,7 +253,15 @@ pub fn solve(
         });
     }
     let n = m.lcp_size();
-    let scale = m.lcp_m.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    // NOTE: not below the contact rows' own scale before the joints are
+    // eliminated: where the joints hold every contact (a contact between
+    // two jointed spheres whose anchor lies on their line of centres, or
+    // such a sphere and one welded to the world), the reduced matrix is
+    // round-off, and a compliance relative to it would be round-off too.
+    let scale = m
+        .lcp_m
+        .iter()
+        .fold(m.contact_scale(), |a, &b| a.max(b.abs()));
     scratch.diagonal.clear();
     scratch.diagonal.extend((0..n).map(|i| m.lcp_m[i * n + i]));
     for rel in COMPLIANCE {

@@ -224,7 +224,9 @@ fn warm_start(m: &mut Mlcp, state: &State, step: Step) {
     }
     m.lambda[..m.nb].copy_from_slice(&state.warm_joint);
     for (i, &ci) in m.lcp_contacts.iter().enumerate() {
-        m.lambda[m.nb + i] = state.warm(step.contacts[ci].id).map_or(0.0, |w| w.normal);
+        if m.held.get(i) != Some(&true) {
+            m.lambda[m.nb + i] = state.warm(step.contacts[ci].id).map_or(0.0, |w| w.normal);
+        }
     }
     for (f, &i) in m.friction_of.iter().enumerate() {
         let c = &step.contacts[m.lcp_contacts[i]];
@@ -273,6 +275,7 @@ fn run(
         nd: m.nd,
         friction_of: &m.friction_of,
         mu: &m.mu,
+        held: &m.held,
         minv: step.minv,
         nu_free: step.nu_free,
         lcp: Lcp {

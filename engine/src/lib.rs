@@ -33,7 +33,7 @@ pub mod state;
 
 pub use applied::{InputError, Inputs};
 pub use fallback::Fallback;
-pub use model::{Attachment, Model, Skips};
+pub use model::{Attachment, Model, Skips, Turning};
 pub use report::{LadderCounts, Lap, StepError, StepReport, Timings};
 pub use state::{BodyState, State, WarmContact};
 
@@ -427,6 +427,13 @@ impl Engine {
         &self.ws.impulses
     }
 
+    /// The velocities `[v_i, w_i]` per body that the last step's solve gave
+    /// and the position update used: the state's, except that an island
+    /// the step put to sleep has zero in the state (`sleep::update`).
+    pub fn solved_velocities(&self) -> &[f64] {
+        &self.ws.nu
+    }
+
     /// The contact set of the last step, every potential contact included.
     pub fn contacts(&self) -> &[Contact] {
         &self.ws.contacts
@@ -494,6 +501,7 @@ impl Engine {
         self.projected = match project::deep_penetration(
             &ws.contacts,
             &ws.minv,
+            &self.model.joints,
             &self.model.params,
             &mut self.state,
             &mut self.lemke,

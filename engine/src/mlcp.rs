@@ -194,6 +194,22 @@ pub fn normal_offset(c: &Contact, v_n_free: f64, p: &Params) -> f64 {
     }
 }
 
+/// A normal row whose diagonal the joints' elimination brings below this
+/// fraction of its own (`W_nn - Y^T Y <= HELD W_nn`) is held by the joints:
+/// its impulse moves nothing the joints do not undo, so the joints alone
+/// set its gap (two spheres jointed at a point of their line of centres).
+/// Such a row is never asked to separate (its `a_n` is clipped at zero, as
+/// in [`Offsets::Relaxed`]) and carries no impulse: it is taken out of the
+/// LCP. A penetration the joints hold cannot be removed, and asking for it
+/// made the rigid LCP unsolvable or, with the row's round-off diagonal,
+/// gave impulses of 1e16 N s whose leftover broke the joint and gave
+/// energy (random scenes 4879, 9714). The elimination's round-off was
+/// measured up to 2.7e-8 of `W_nn` (seed 5303: a sphere welded to the
+/// world, another jointed to it, a joint block with a pivot near zero);
+/// an impulse that needs a million times its own size to move anything
+/// is held for every purpose of a step.
+pub const HELD: f64 = 1e-6;
+
 /// Which constant terms the LCP's right-hand side carries.
 ///
 /// `Full` is the formulation of formulation.md: joint rows
@@ -297,6 +313,9 @@ pub struct Mlcp {
     pub z: Vec<f64>,
     /// Joint impulses (3 per joint, on body A).
     pub p_b: Vec<f64>,
+    /// Per normal row, whether the joints hold it (see [`HELD`]); empty
+    /// where no row is held.
+    pub held: Vec<bool>,
     /// The joint block was singular (redundant joints) and was factored
     /// with a small diagonal shift.
     pub joint_regularized: bool,
@@ -500,6 +519,7 @@ impl Mlcp {
         self.reduce_joints()?;
         if matrix_free {
             self.lcp_m.clear();
+            self.mark_held_matrix_free();
         } else {
             self.form_matrix();
         }
@@ -651,11 +671,16 @@ impl Mlcp {
         // Gap terms: the free normal velocity includes the joints' response.
         for i in 0..self.nc {
             let c = &contacts[self.lcp_contacts[i]];
+            let held = self.held.get(i).copied().unwrap_or(false);
             let a_n = match offsets {
-                Offsets::Full => normal_offset(c, self.lcp_q[i], p),
-                Offsets::Relaxed => normal_offset(c, self.lcp_q[i], p).max(0.0),
+                Offsets::Full if !held => normal_offset(c, self.lcp_q[i], p),
+                _ => normal_offset(c, self.lcp_q[i], p).max(0.0),
             };
             self.lcp_q[i] += a_n;
+            if held {
+                // Its row is `w = z + q` (form_matrix): z = 0.
+                self.lcp_q[i] = self.lcp_q[i].max(0.0);
+            }
             self.offset[nb + i] = a_n;
         }
     }
@@ -697,6 +722,23 @@ impl Mlcp {
                 *out = ci1 * a + ci2 * b;
             }
         }
+        self.held.clear();
+        self.held.extend((0..self.nc).map(|i| {
+            let unreduced = self.w[(nb + i) * r + nb + i];
+            self.sb[i * mb + i] <= HELD * unreduced
+        }));
+        // A held row leaves the problem: `w_i = W_nn z_i + q_i` alone, with
+        // `q_i >= 0` (form_rhs), so `z_i = 0`. Its round-off couplings
+        // would otherwise be pivoted on. Its slack row keeps `mu z_i`.
+        for i in 0..self.nc {
+            if self.held[i] {
+                for j in 0..m {
+                    self.lcp_m[i * n + j] = 0.0;
+                    self.lcp_m[j * n + i] = 0.0;
+                }
+                self.lcp_m[i * n + i] = self.w[(nb + i) * r + nb + i];
+            }
+        }
         // Compliant normal rows (model.rs, `Compliance`).
         for i in 0..self.nc {
             self.lcp_m[i * n + i] += self.cfm[self.nb + i];
@@ -712,6 +754,34 @@ impl Mlcp {
             }
             self.lcp_m[s * n + i] = mu;
         }
+    }
+
+    /// [`Mlcp::held`] without the formed matrix: the reduced diagonal
+    /// `W_nn - |y_n|^2` from the normal row and its column of `Y`, as
+    /// `form_matrix` has it in `sb`.
+    fn mark_held_matrix_free(&mut self) {
+        let nb = self.nb;
+        self.held.clear();
+        if nb == 0 {
+            return;
+        }
+        for i in 0..self.nc {
+            let unreduced = self.basis[nb + i].dot(&self.weighted[nb + i]);
+            let yi = &self.y[i * nb..(i + 1) * nb];
+            let reduced = unreduced - yi.iter().map(|a| a * a).sum::<f64>();
+            self.held.push(reduced <= HELD * unreduced);
+        }
+    }
+
+    /// The largest diagonal entry of the contact rows' Delassus matrix
+    /// before the joints are eliminated (m/s per N s; 0 when not formed):
+    /// the scale of a contact row whose reduced row the joints make zero.
+    pub fn contact_scale(&self) -> f64 {
+        let r = self.basis.len();
+        if self.w.len() < r * r {
+            return 0.0;
+        }
+        (self.nb..r).fold(0.0f64, |a, i| a.max(self.w[i * r + i]))
     }
 
     /// From the LCP solution in `self.z`: joint impulses

@@ -5,7 +5,7 @@
 //! the energy and speed bounds of `bench::robust::check`.
 
 use cosim_server::bench::robust;
-use cosim_server::engine::{Engine, LadderCounts, Model};
+use cosim_server::engine::{Engine, LadderCounts, Model, Turning};
 use cosim_shared::{Scene, SolverChoice};
 use cosim_tests::shipped_scene;
 
@@ -153,12 +153,20 @@ fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
     assert_eq!(robust::scene(7), robust::scene(7));
     assert_ne!(robust::scene(7), robust::scene(8));
     let (mut corners, mut joints, mut overlapping) = (0, 0, 0);
+    let (mut hinges, mut welds) = (0, 0);
     for seed in 1..=200 {
         let text = robust::scene(seed);
         let scene = Scene::parse(&text, "<robust>").unwrap_or_else(|e| panic!("{e}\n{text}"));
         let model = Model::from_scene(&scene);
         corners += usize::from(model.planes.len() >= 2);
         joints += usize::from(!model.joints.is_empty());
+        for j in &model.joints {
+            match j.turning {
+                Turning::Free => {}
+                Turning::Axis { .. } => hinges += 1,
+                Turning::Locked { .. } => welds += 1,
+            }
+        }
         let engine = Engine::new(model.clone());
         let (mut scratch, mut geoms) = Default::default();
         let deep = cosim_server::engine::measure::max_penetration(
@@ -172,6 +180,11 @@ fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
     assert!(
         corners >= 100 && joints >= 60 && overlapping >= 40,
         "{corners} {joints} {overlapping}"
+    );
+    // Every kind of joint, each about a third of them.
+    assert!(
+        hinges >= 30 && welds >= 30,
+        "{hinges} hinges, {welds} welds"
     );
 }
 

@@ -96,6 +96,9 @@ pub struct PgsProblem<'a> {
     /// Friction block `f` belongs to normal row `friction_of[f]`, with `mu[f]`.
     pub friction_of: &'a [usize],
     pub mu: &'a [f64],
+    /// Normal rows the joints hold (`mlcp::HELD`; empty for none): they
+    /// keep a zero impulse, so their friction has none either.
+    pub held: &'a [bool],
     pub minv: &'a [InvMass],
     pub nu_free: &'a [f64],
     /// The reduced LCP's `q` (its matrix may be empty: the residual is
@@ -429,6 +432,10 @@ impl Pgs {
                 .zip(p.cfm)
                 .map(|((row, w), cfm)| row.dot(w) + cfm),
         );
+        // A zero diagonal is a row the updates leave alone.
+        for (i, _) in p.held.iter().enumerate().filter(|(_, &h)| h) {
+            self.diag[p.nb + i] = 0.0;
+        }
         self.block_of.clear();
         self.block_of.resize(p.nc, None);
         for (f, &i) in p.friction_of.iter().enumerate() {
@@ -705,6 +712,9 @@ impl Pgs {
                 out.joint2 += free * free;
                 continue;
             };
+            if p.held.get(i) == Some(&true) {
+                continue;
+            }
             let pn = x[k];
             let un = p.rows[k].velocity(nu) + p.offset[k] + p.cfm[k] * pn;
             out.q2 += p.lcp.q[i] * p.lcp.q[i];
