@@ -19,6 +19,17 @@
 //!   at `u_A = u_B`.
 //! - Fixed (`Turning::Locked`): `q_err = q_B (q_A rel)^-1`, `theta` its
 //!   rotation vector, on the three world axes.
+//!
+//! A slider (prismatic: `Turning::Locked` and a `slide` axis `u`, fixed in
+//! A) keeps the anchors together only along the two directions `n_k`
+//! normal to `u`: `psi . n_k = 0`, the anchors free to part along `u`.
+//! As `n_k` turns with A, the row is the exact rate of `n_k . psi`:
+//! `d/dt (n . psi) = (w_A x n) . psi + n . (v_A + w_A x r_A - v_B - w_B x
+//! r_B) = n . (v_A + w_A x (r_A - psi) - v_B - w_B x r_B)`, using
+//! `(w x n) . psi = n . (w x (-psi))`; so A's lever arm is `r_A - psi =
+//! p_B - x_A`, B's anchor seen from A's centre (ODE's slider does the
+//! same). Without it the rows would miss `w_A . (n x psi)`, which grows
+//! with the slide's travel.
 
 use crate::mlcp::anchor;
 use crate::model::{Attachment, Joint, Turning};
@@ -57,7 +68,7 @@ fn turning(joint: &Joint, state: &State) -> Option<(Vector3<f64>, TurningRows)> 
     let (qa, qb) = (orientation(joint.a, state), orientation(joint.b, state));
     match joint.turning {
         Turning::Free => None,
-        Turning::Axis { a, b } => {
+        Turning::Axis { a, b, .. } => {
             let (ua, ub) = (qa * a, qb * b);
             let [n1, n2] = normals(&ua);
             Some((ua.cross(&ub), [Some(n1), Some(n2), None]))
@@ -83,9 +94,21 @@ pub fn push_rows(
     let (pa, ra) = anchor(joint.a, &joint.local_a, state);
     let (pb, rb) = anchor(joint.b, &joint.local_b, state);
     let psi = pa - pb;
-    for k in 0..3 {
-        rows.push(Row::along(Vector3::ith(k, 1.0), ra, rb));
-        offset.push(factor * psi[k] / h);
+    match joint.slide {
+        None => {
+            for k in 0..3 {
+                rows.push(Row::along(Vector3::ith(k, 1.0), ra, rb));
+                offset.push(factor * psi[k] / h);
+            }
+        }
+        Some(axis) => {
+            let u = orientation(joint.a, state) * axis;
+            let ra = ra.map(|(i, r)| (i, r - psi));
+            for n in normals(&u) {
+                rows.push(Row::along(n, ra, rb));
+                offset.push(factor * psi.dot(&n) / h);
+            }
+        }
     }
     let Some((theta, dirs)) = turning(joint, state) else {
         return;
@@ -94,6 +117,80 @@ pub fn push_rows(
         rows.push(Row::turning(p, body(joint.a), body(joint.b)));
         offset.push(-factor * theta.dot(&p) / h);
     }
+}
+
+/// The joint's anchor error (m): the distance between its anchors, or
+/// for a slider their distance off its axis.
+pub fn anchor_error(joint: &Joint, state: &State) -> f64 {
+    let (pa, _) = anchor(joint.a, &joint.local_a, state);
+    let (pb, _) = anchor(joint.b, &joint.local_b, state);
+    let psi = pa - pb;
+    match joint.slide {
+        None => psi.norm(),
+        Some(axis) => {
+            let u = orientation(joint.a, state) * axis;
+            (psi - u * u.dot(&psi)).norm()
+        }
+    }
+}
+
+/// The impulse the joint's anchor rows put on A (N s, world frame), from
+/// their rows and impulses (B gets its opposite).
+pub fn anchor_impulse(joint: &Joint, rows: &[Row], impulses: &[f64]) -> Vector3<f64> {
+    rows.iter()
+        .zip(impulses)
+        .take(joint.anchor_rows())
+        .map(|(row, p)| match (&row.a, &row.b) {
+            (Some(a), _) => a.lin * *p,
+            (None, Some(b)) => -b.lin * *p,
+            (None, None) => Vector3::zeros(),
+        })
+        .sum()
+}
+
+/// A hinge's or slider's coordinate and its rate: the hinge's angle
+/// (rad) of B about the axis from where it was at t = 0 and its angular
+/// rate (rad/s), or the slider's offset (m) of B's anchor from A's along
+/// the axis and its rate (m/s); `None` for spherical and fixed joints
+/// (no single coordinate). Signs follow the axis as given in the scene,
+/// B relative to A (MuJoCo's hinge and slide `qpos`, `qvel`); the angle
+/// is in (-pi, pi] (a figure unwraps it).
+pub fn coordinate(joint: &Joint, state: &State) -> Option<(f64, f64)> {
+    let velocity = |att: Attachment, r: &Vector3<f64>| match att {
+        Attachment::World => (Vector3::zeros(), Vector3::zeros()),
+        Attachment::Body(i) => {
+            let b = &state.bodies[i];
+            (b.v + b.w.cross(r), b.w)
+        }
+    };
+    if let Some(axis) = joint.slide {
+        let u = orientation(joint.a, state) * axis;
+        let (pa, ra) = anchor(joint.a, &joint.local_a, state);
+        let (pb, rb) = anchor(joint.b, &joint.local_b, state);
+        let d = pb - pa;
+        // d/dt (u . d) = (w_A x u) . d + u . (v_pB - v_pA); with the
+        // rotation locked the first term is w_A . (u x d), zero along u.
+        let (va, wa) = velocity(joint.a, &ra.map_or_else(Vector3::zeros, |(_, r)| r));
+        let (vb, _) = velocity(joint.b, &rb.map_or_else(Vector3::zeros, |(_, r)| r));
+        return Some((u.dot(&d), wa.cross(&u).dot(&d) + u.dot(&(vb - va))));
+    }
+    let Turning::Axis {
+        a, zero_a, zero_b, ..
+    } = joint.turning
+    else {
+        return None;
+    };
+    let (qa, qb) = (orientation(joint.a, state), orientation(joint.b, state));
+    let u = qa * a;
+    // The angle from A's zero direction to B's about the axis: the two
+    // coincided at t = 0 and are normal to the axis in each frame.
+    let (ea, eb) = (qa * zero_a, qb * zero_b);
+    let angle = u.dot(&ea.cross(&eb)).atan2(ea.dot(&eb));
+    let (wa, wb) = (
+        velocity(joint.a, &Vector3::zeros()).1,
+        velocity(joint.b, &Vector3::zeros()).1,
+    );
+    Some((angle, u.dot(&(wb - wa))))
 }
 
 /// The joint's rotation error (rad): the angle between the axes as the

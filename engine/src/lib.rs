@@ -892,10 +892,11 @@ impl Engine {
         // Filled below in the LCP's contact order, which is ascending id.
         self.state.warm_contacts.clear();
         for (j, joint) in self.model.joints.iter().enumerate() {
-            // The anchor's force impulse (the joint's first three rows);
-            // a hinge's or fixed joint's torque rows are not reported.
+            // The anchor's force impulse (the joint's anchor rows); a
+            // hinge's, slider's or fixed joint's torque rows are not
+            // reported.
             let first = self.model.joint_start[j];
-            let p = Vector3::new(m.p_b[first], m.p_b[first + 1], m.p_b[first + 2]);
+            let p = joint::anchor_impulse(joint, &m.rows[first..], &m.p_b[first..]);
             let party = |a: Attachment| match a {
                 Attachment::World => Party::World,
                 Attachment::Body(i) => Party::Body(i),

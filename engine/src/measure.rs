@@ -1,7 +1,6 @@
 //! Measurements of a state: energy, penetration, joint error.
 
 use super::collision::{detect, Geometry, Listing, Scratch};
-use super::mlcp::anchor;
 use super::model::Model;
 use super::state::State;
 
@@ -60,11 +59,10 @@ pub fn max_penetration(
     scratch.iter().fold(0.0f64, |a, g| a.max(-g.gap))
 }
 
-/// Largest joint error `|psi_b|` (m).
+/// Largest joint error `|psi_b|` (m; a slider's off its axis).
 pub fn max_joint_error(model: &Model, state: &State) -> f64 {
-    model.joints.iter().fold(0.0f64, |a, j| {
-        let (pa, _) = anchor(j.a, &j.local_a, state);
-        let (pb, _) = anchor(j.b, &j.local_b, state);
-        a.max((pa - pb).norm())
-    })
+    model
+        .joints
+        .iter()
+        .fold(0.0f64, |a, j| a.max(crate::joint::anchor_error(j, state)))
 }

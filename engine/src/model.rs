@@ -57,8 +57,9 @@ pub enum Attachment {
 }
 
 /// A joint: pins a point fixed in body A to a point fixed in body B (or
-/// the world), `psi_b = x_A + R_A a_A - x_B - R_B a_B = 0` (three rows),
-/// and constrains the relative rotation as `turning` says (joint.rs).
+/// the world), `psi_b = x_A + R_A a_A - x_B - R_B a_B = 0` (three rows;
+/// two, normal to the axis, for a slider), and constrains the relative
+/// rotation as `turning` says (joint.rs).
 #[derive(Debug, Clone)]
 pub struct Joint {
     pub name: String,
@@ -70,6 +71,11 @@ pub struct Joint {
     /// Constant joint torque from the scene: the initial held input.
     pub torque: Vector3<f64>,
     pub turning: Turning,
+    /// Prismatic: the unit sliding axis in A's frame (a world direction
+    /// for the world); the anchors may part along it only.
+    pub slide: Option<Vector3<f64>>,
+    /// Whether the two bodies' shapes touch (see `Model::excluded`).
+    pub collide: bool,
 }
 
 /// What a joint leaves of the relative rotation.
@@ -79,7 +85,15 @@ pub enum Turning {
     Free,
     /// Revolute: only about the hinge axis, a unit vector held in each
     /// side's frame (A's and B's; a world direction for the world).
-    Axis { a: Vector3<f64>, b: Vector3<f64> },
+    /// `zero_a`, `zero_b`: one direction normal to the axis as each side
+    /// held it at t = 0, where the hinge's angle is zero
+    /// (`joint::coordinate`).
+    Axis {
+        a: Vector3<f64>,
+        b: Vector3<f64>,
+        zero_a: Vector3<f64>,
+        zero_b: Vector3<f64>,
+    },
     /// Fixed: none. B's orientation is A's times `rel` (A's frame to B's,
     /// as at t = 0).
     Locked { rel: UnitQuaternion<f64> },
@@ -89,10 +103,21 @@ impl Joint {
     /// Constraint rows: three for the anchor, plus two (hinge) or three
     /// (fixed) on the rotation.
     pub fn rows(&self) -> usize {
-        3 + match self.turning {
-            Turning::Free => 0,
-            Turning::Axis { .. } => 2,
-            Turning::Locked { .. } => 3,
+        self.anchor_rows()
+            + match self.turning {
+                Turning::Free => 0,
+                Turning::Axis { .. } => 2,
+                Turning::Locked { .. } => 3,
+            }
+    }
+
+    /// The rows on the anchors, first in the joint's rows: three, or two
+    /// for a slider.
+    pub fn anchor_rows(&self) -> usize {
+        if self.slide.is_some() {
+            2
+        } else {
+            3
         }
     }
 }
@@ -113,7 +138,7 @@ fn weld_groups(n: usize, joints: &[Joint]) -> Vec<usize> {
         n + 1,
         joints
             .iter()
-            .filter(|j| matches!(j.turning, Turning::Locked { .. }))
+            .filter(|j| matches!(j.turning, Turning::Locked { .. }) && j.slide.is_none())
             .map(|j| (node(j.a), Counterpart::Body(node(j.b)))),
     );
     let world = islands.root_of(n);
@@ -268,6 +293,10 @@ pub struct Model {
     /// scenes: a sphere welded to the world resting on a plane). MuJoCo
     /// excludes such pairs too.
     pub weld: Vec<usize>,
+    /// The body pairs `(i, j)`, `i < j`, ascending, that a joint with
+    /// `collide = false` keeps out of contact (MuJoCo's parent-child
+    /// filter, Drake's collision filter groups).
+    pub excluded: Vec<(usize, usize)>,
     pub params: Params,
     pub initial: Vec<InitialBody>,
 }
@@ -357,20 +386,27 @@ impl Model {
             .map(|j| {
                 let (a, b) = (find(&j.body_a), find(&j.body_b));
                 let anchor = v3(j.anchor);
+                // Validated: finite and not zero where the kind needs it.
+                let axis = v3(j.axis.unwrap_or([0.0, 0.0, 1.0])).normalize();
+                let locked = Turning::Locked {
+                    rel: turned(a).inverse() * turned(b),
+                };
+                use cosim_shared::JointKind as K;
                 let turning = match j.kind {
-                    cosim_shared::JointKind::Spherical => Turning::Free,
-                    cosim_shared::JointKind::Revolute => {
-                        // Validated: finite and not zero.
-                        let axis = v3(j.axis.unwrap_or([0.0, 0.0, 1.0])).normalize();
+                    K::Spherical => Turning::Free,
+                    K::Revolute => {
+                        let zero = crate::contact::perpendicular(&axis);
                         Turning::Axis {
                             a: turned(a).inverse_transform_vector(&axis),
                             b: turned(b).inverse_transform_vector(&axis),
+                            zero_a: turned(a).inverse_transform_vector(&zero),
+                            zero_b: turned(b).inverse_transform_vector(&zero),
                         }
                     }
-                    cosim_shared::JointKind::Fixed => Turning::Locked {
-                        rel: turned(a).inverse() * turned(b),
-                    },
+                    K::Fixed | K::Prismatic => locked,
                 };
+                let slide =
+                    (j.kind == K::Prismatic).then(|| turned(a).inverse_transform_vector(&axis));
                 Joint {
                     name: j.name.clone(),
                     a,
@@ -379,10 +415,22 @@ impl Model {
                     local_b: local(b, anchor),
                     torque: v3(j.torque),
                     turning,
+                    slide,
+                    collide: j.collide,
                 }
             })
             .collect();
         let weld = weld_groups(scene.bodies.len(), &joints);
+        let mut excluded: Vec<(usize, usize)> = joints
+            .iter()
+            .filter(|j| !j.collide)
+            .filter_map(|j| match (j.a, j.b) {
+                (Attachment::Body(a), Attachment::Body(b)) => Some((a.min(b), a.max(b))),
+                _ => None,
+            })
+            .collect();
+        excluded.sort_unstable();
+        excluded.dedup();
         let mut joint_start = vec![0];
         for j in &joints {
             joint_start.push(joint_start[joint_start.len() - 1] + j.rows());
@@ -395,6 +443,7 @@ impl Model {
             joints,
             joint_start,
             weld,
+            excluded,
             params: Params {
                 h: s.dt,
                 gravity: v3(s.gravity),
@@ -466,6 +515,13 @@ impl Model {
             }
         }
         (lo, Counterpart::Body(lo + 1 + k - before(lo)))
+    }
+
+    /// Whether bodies `i` and `j` can be in contact: not in one weld
+    /// group (`Model::weld`) nor a pair a joint keeps apart
+    /// (`Model::excluded`).
+    pub fn may_touch(&self, i: usize, j: usize) -> bool {
+        self.weld[i] != self.weld[j] && self.excluded.binary_search(&(i.min(j), i.max(j))).is_err()
     }
 
     /// Number of potential contacts: every sphere against every plane and,

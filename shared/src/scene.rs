@@ -364,6 +364,9 @@ pub enum JointKind {
     Revolute,
     /// The two sides move as one (6 rows).
     Fixed,
+    /// A slider: no relative rotation, and the anchors move apart only
+    /// along `axis` (5 rows).
+    Prismatic,
 }
 
 /// `[[joint]]`: a bilateral joint between two bodies or a body and the world.
@@ -379,12 +382,20 @@ pub struct JointDesc {
     /// World point at t = 0, fixed in both bodies from then on.
     pub anchor: [f64; 3],
     /// `revolute`: the hinge axis, a world direction at t = 0, fixed in
-    /// both bodies from then on (any length but zero). Only for revolute.
+    /// both bodies from then on; `prismatic`: the sliding direction at
+    /// t = 0, fixed in body_a (any length but zero). Only for these two.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub axis: Option<[f64; 3]>,
     /// Constant joint torque: `+torque` on body_b, `-torque` on body_a.
     #[serde(default)]
     pub torque: [f64; 3],
+    /// Whether the two bodies' shapes touch each other. MuJoCo and Drake
+    /// leave a joint's two bodies out of contact (links overlap at their
+    /// hinges); here the default is true, since the notes' scene has
+    /// jointed spheres that collide. With the world as one side it changes
+    /// nothing: the planes are not the world's body.
+    #[serde(default = "default_true")]
+    pub collide: bool,
 }
 
 impl JointKind {
@@ -393,6 +404,7 @@ impl JointKind {
             JointKind::Spherical => "spherical",
             JointKind::Revolute => "revolute",
             JointKind::Fixed => "fixed",
+            JointKind::Prismatic => "prismatic",
         }
     }
 }
@@ -625,13 +637,13 @@ impl Scene {
             finite3(&j.anchor).map_err(|m| err(f("anchor"), m))?;
             finite3(&j.torque).map_err(|m| err(f("torque"), m))?;
             match (j.kind, j.axis) {
-                (JointKind::Revolute, None) => {
+                (kind @ (JointKind::Revolute | JointKind::Prismatic), None) => {
                     return Err(err(
                         f("axis"),
-                        "missing: a revolute joint needs its hinge axis".into(),
+                        format!("missing: a {} joint needs its axis", kind.as_str()),
                     ))
                 }
-                (JointKind::Revolute, Some(a)) => {
+                (JointKind::Revolute | JointKind::Prismatic, Some(a)) => {
                     finite3(&a).map_err(|m| err(f("axis"), m))?;
                     let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
                     if !(n > 1e-9 && n.is_finite()) {
@@ -645,7 +657,7 @@ impl Scene {
                     return Err(err(
                         f("axis"),
                         format!(
-                            "only a revolute joint has an axis (this one is {})",
+                            "only a revolute or prismatic joint has an axis (this one is {})",
                             kind.as_str()
                         ),
                     ))

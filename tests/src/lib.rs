@@ -40,6 +40,25 @@ pub fn sim(dt: f64, steps: u64, gravity: [f64; 3]) -> String {
 /// (the benchmarks' helpers).
 pub use cosim_server::bench::text::{joint, plane, sphere};
 
+/// A `[[joint]]` of any type, with its axis where it has one.
+pub fn joint_of(
+    kind: &str,
+    name: &str,
+    a: &str,
+    b: &str,
+    anchor: [f64; 3],
+    axis: Option<[f64; 3]>,
+) -> String {
+    let mut s = format!(
+        "[[joint]]\nname = \"{name}\"\ntype = \"{kind}\"\nbody_a = \"{a}\"\nbody_b = \"{b}\"\nanchor = [{:e}, {:e}, {:e}]\n",
+        anchor[0], anchor[1], anchor[2]
+    );
+    if let Some(u) = axis {
+        s += &format!("axis = [{:e}, {:e}, {:e}]\n", u[0], u[1], u[2]);
+    }
+    s
+}
+
 pub const G: f64 = 9.81;
 
 /// The text of a scene shipped in `examples/scenes/`.

@@ -153,7 +153,7 @@ fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
     assert_eq!(robust::scene(7), robust::scene(7));
     assert_ne!(robust::scene(7), robust::scene(8));
     let (mut corners, mut joints, mut overlapping) = (0, 0, 0);
-    let (mut hinges, mut welds) = (0, 0);
+    let (mut hinges, mut welds, mut sliders, mut apart) = (0, 0, 0, 0);
     for seed in 1..=200 {
         let text = robust::scene(seed);
         let scene = Scene::parse(&text, "<robust>").unwrap_or_else(|e| panic!("{e}\n{text}"));
@@ -161,11 +161,13 @@ fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
         corners += usize::from(model.planes.len() >= 2);
         joints += usize::from(!model.joints.is_empty());
         for j in &model.joints {
-            match j.turning {
-                Turning::Free => {}
-                Turning::Axis { .. } => hinges += 1,
-                Turning::Locked { .. } => welds += 1,
+            match (j.turning, j.slide) {
+                (Turning::Free, _) => {}
+                (Turning::Axis { .. }, _) => hinges += 1,
+                (Turning::Locked { .. }, Some(_)) => sliders += 1,
+                (Turning::Locked { .. }, None) => welds += 1,
             }
+            apart += usize::from(!j.collide);
         }
         let engine = Engine::new(model.clone());
         let (mut scratch, mut geoms) = Default::default();
@@ -181,10 +183,11 @@ fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
         corners >= 100 && joints >= 60 && overlapping >= 40,
         "{corners} {joints} {overlapping}"
     );
-    // Every kind of joint, each about a third of them.
+    // Every kind of joint, each about a quarter of them; a quarter
+    // without contact between their bodies.
     assert!(
-        hinges >= 30 && welds >= 30,
-        "{hinges} hinges, {welds} welds"
+        hinges >= 25 && welds >= 25 && sliders >= 25 && apart >= 25,
+        "{hinges} hinges, {welds} welds, {sliders} sliders, {apart} apart"
     );
 }
 

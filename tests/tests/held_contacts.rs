@@ -29,7 +29,7 @@ fn overlapping_pair(overlap: f64, tilt: f64, steps: u64) -> String {
     let mut text = sim(1e-3, steps, [0.0, 0.0, -G]);
     text += &sphere("a", R, 1.0, a, [0.0; 3], 0.5, 0.0);
     text += &sphere("b", R, 1.0, b, [0.0; 3], 0.5, 0.0);
-    text += "[[joint]]\nname = \"weld\"\ntype = \"fixed\"\nbody_a = \"world\"\nbody_b = \"a\"\nanchor = [0.0, 0.0, 0.5]\n";
+    text += &joint_of("fixed", "weld", "world", "a", a, None);
     text += &joint("ball", "a", "b", mid);
     text
 }
@@ -106,4 +106,36 @@ fn the_projection_moves_no_body_on_a_joint() {
         (b[1].x - b[0].x).norm() - 2.0 * R
     };
     assert!(gap > -1e-4, "the free sphere is still {gap} m inside");
+}
+
+/// `collide = false` on a joint keeps its two bodies out of contact (as
+/// MuJoCo and Drake do for a joint's bodies): the tilted pair above then
+/// lists no contact at all and `b` swings through the overlap freely,
+/// where with the default the contact is listed and pushes.
+#[test]
+fn a_joint_with_collide_false_keeps_its_bodies_out_of_contact() {
+    let pair = overlapping_pair(2e-3, 0.3, 200);
+    let apart = pair.replace(
+        "type = \"spherical\"",
+        "type = \"spherical\"\ncollide = false",
+    );
+    assert_ne!(pair, apart);
+    for (text, collide) in [(pair, true), (apart, false)] {
+        let mut e = engine(&text);
+        let (mut listed, mut pushed) = (0usize, 0.0f64);
+        run(&mut e, 200, |e, _| {
+            listed += e.contacts().len();
+            for i in e.impulses() {
+                if i.kind == ImpulseKind::Normal {
+                    pushed = pushed.max(i.impulse.norm());
+                }
+            }
+        });
+        if collide {
+            assert!(listed > 0 && pushed > 0.0, "the default lists the contact");
+        } else {
+            assert_eq!(listed, 0, "no contact between the joint's bodies");
+            assert_eq!(pushed, 0.0);
+        }
+    }
 }

@@ -124,8 +124,7 @@ pub fn detect(
         )
     };
     let n = model.bodies.len();
-    // Bodies of one weld group do not touch (`Model::weld`).
-    let apart = |&(i, j): &(usize, usize)| model.weld[i] != model.weld[j];
+    let apart = |&(i, j): &(usize, usize)| model.may_touch(i, j);
     if all {
         for i in 0..n {
             out.extend((i + 1..n).map(|j| (i, j)).filter(apart).map(pair));

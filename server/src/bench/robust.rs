@@ -177,8 +177,9 @@ pub fn scene(seed: u64) -> String {
     }
     // 0..3 joints: to the world at an anchor near a sphere (its pin
     // direction anywhere, inside a friction cone too), or between two
-    // spheres at their midpoint; spherical, revolute (a random axis) or
-    // fixed; some with a constant torque.
+    // spheres at their midpoint; spherical, revolute or prismatic (a
+    // random axis) or fixed; some with a constant torque, some with
+    // `collide = false`.
     let n = centres.len();
     // The kind of each joint comes from a stream of its own, so that every
     // other draw (and so every scene of spherical joints before kinds were
@@ -209,9 +210,9 @@ pub fn scene(seed: u64) -> String {
             ];
             joint(&format!("j{j}"), &format!("s{a}"), &format!("s{b}"), mid)
         };
-        match kinds.below(3) {
+        match kinds.below(4) {
             0 => {}
-            1 => {
+            kind @ (1 | 2) => {
                 let axis = [
                     kinds.range(-1.0, 1.0),
                     kinds.range(-1.0, 1.0),
@@ -223,10 +224,14 @@ pub fn scene(seed: u64) -> String {
                 } else {
                     unit(axis)
                 };
-                text = text.replacen("type = \"spherical\"", "type = \"revolute\"", 1);
+                let to = if kind == 1 { "revolute" } else { "prismatic" };
+                text = text.replacen("\"spherical\"", &format!("{to:?}"), 1);
                 text += &format!("axis = [{:e}, {:e}, {:e}]\n", axis[0], axis[1], axis[2]);
             }
             _ => text = text.replacen("type = \"spherical\"", "type = \"fixed\"", 1),
+        }
+        if kinds.uniform() < 0.25 {
+            text += "collide = false\n";
         }
         if rng.uniform() < 0.3 {
             text += &format!(

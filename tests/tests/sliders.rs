@@ -1,0 +1,116 @@
+//! Prismatic (slider) joints (issue 17, point 1): a body on a rail falls
+//! along it at the analytic rate, and a slider on a spinning body keeps
+//! the angular momentum (which fails if the rows' lever arm misses the
+//! slide's travel: joint.rs).
+
+use cosim_server::engine::joint::{angle_error, coordinate};
+use cosim_shared::DEFAULT_PGS_TOLERANCE;
+use cosim_tests::*;
+use nalgebra::Vector3;
+
+const R: f64 = 0.05;
+
+/// A frictionless sphere on a rail from the world, tilted 30 degrees down
+/// from the horizontal, thrown with a speed that has parts along the rail
+/// and across it (which the slider takes away in the first step).
+#[test]
+fn a_body_on_a_rail_slides_down_it_at_g_sin_30() {
+    let (h, steps) = (1e-3, 1000u64);
+    let u = Vector3::new(30f64.to_radians().cos(), 0.0, -30f64.to_radians().sin());
+    let v0 = [0.4, 0.7, 0.2];
+    let mut s = sim(h, steps, [0.0, 0.0, -G]);
+    s += &sphere("slider", R, 2.0, [0.0, 0.0, 1.0], v0, 0.0, 0.0);
+    s += &joint_of(
+        "prismatic",
+        "rail",
+        "world",
+        "slider",
+        [0.0, 0.0, 1.0],
+        Some(u.into()),
+    );
+    let mut e = engine(&s);
+    let joint = e.model().joints[0].clone();
+    let (mut off_axis, mut turned) = (0.0f64, 0.0f64);
+    run(&mut e, steps, |e, r| {
+        off_axis = off_axis.max(r.max_joint_error);
+        turned = turned.max(angle_error(&joint, e.state()));
+    });
+    // Symplectic Euler from the speed along the rail, a = g sin 30:
+    // v_n = v_u + n h a, x_n = sum h v_k = n h v_u + h^2 a n (n + 1) / 2.
+    let a = G * 0.5;
+    let vu = Vector3::from(v0).dot(&u);
+    let n = steps as f64;
+    let (x, v) = (n * h * vu + h * h * a * n * (n + 1.0) / 2.0, vu + n * h * a);
+    let (offset, rate) = coordinate(&joint, e.state()).expect("a slider has a coordinate");
+    // PGS stops within DEFAULT_PGS_TOLERANCE (m/s) of the answer; its
+    // error can add up over the run's time (Lemke's is round-off).
+    let t = n * h;
+    assert!(
+        (rate - v).abs() < DEFAULT_PGS_TOLERANCE,
+        "rate {rate}, analytic {v}"
+    );
+    assert!(
+        (offset - x).abs() < DEFAULT_PGS_TOLERANCE * t,
+        "offset {offset}, analytic {x}"
+    );
+    assert!(off_axis < 1e-9, "left the rail by {off_axis} m");
+    assert!(turned < 1e-9, "turned by {turned} rad");
+}
+
+/// A heavy sphere spinning at 2 rad/s in zero gravity with a light one on
+/// a slider along x: the light one slides out. The joint's impulses are
+/// internal and, with the lever arm at B's anchor, have no moment about
+/// any point, so the linear and angular momenta are those of the start to
+/// round-off whatever the solver's error.
+#[test]
+fn a_slider_on_a_spinning_body_keeps_the_momenta_and_slides_out() {
+    let (h, steps) = (1e-3, 2000u64);
+    let w = [0.0, 0.0, 2.0];
+    let mut s = sim(h, steps, [0.0; 3]);
+    s += &sphere("hub", R, 2.0, [0.0; 3], [0.0; 3], 0.0, 0.0);
+    s += &format!("angular_velocity = {w:?}\n");
+    s += &sphere("bead", R, 1.0, [0.15, 0.0, 0.0], [0.0, 0.3, 0.0], 0.0, 0.0);
+    s += &format!("angular_velocity = {w:?}\n");
+    s += &joint_of(
+        "prismatic",
+        "spoke",
+        "hub",
+        "bead",
+        [0.15, 0.0, 0.0],
+        Some([1.0, 0.0, 0.0]),
+    );
+    let mut e = engine(&s);
+    let momenta = |e: &cosim_server::engine::Engine| {
+        let (mut p, mut l) = (Vector3::zeros(), Vector3::zeros());
+        for (b, st) in e.model().bodies.iter().zip(&e.state().bodies) {
+            p += st.v * b.mass;
+            // A sphere's inertia is isotropic: the same in every frame.
+            l += st.x.cross(&(st.v * b.mass)) + b.inertia * st.w;
+        }
+        (p, l)
+    };
+    let (p0, l0) = momenta(&e);
+    let joint = e.model().joints[0].clone();
+    let (mut dp, mut dl, mut off_axis, mut turned) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    run(&mut e, steps, |e, r| {
+        let (p, l) = momenta(e);
+        dp = dp.max((p - p0).norm());
+        dl = dl.max((l - l0).norm());
+        off_axis = off_axis.max(r.max_joint_error);
+        turned = turned.max(angle_error(&joint, e.state()));
+    });
+    // Round-off: 2,000 steps of sums of terms of order |L| = 0.05.
+    assert!(dp < 1e-12, "linear momentum changed by {dp}");
+    assert!(
+        dl < 1e-12 * l0.norm().max(1.0),
+        "angular momentum changed by {dl}"
+    );
+    let (offset, rate) = coordinate(&joint, e.state()).expect("a slider has a coordinate");
+    assert!(
+        offset > 0.1 && rate > 0.0,
+        "slid out by {offset} m at {rate} m/s"
+    );
+    // The stabilisation holds the drift to its velocity error's scale.
+    assert!(off_axis < 1e-6, "left the spoke by {off_axis} m");
+    assert!(turned < 1e-6, "the bead turned on the hub by {turned} rad");
+}
