@@ -111,6 +111,16 @@ impl Joint {
             }
     }
 
+    /// The scene's name of the joint's type.
+    pub fn kind(&self) -> &'static str {
+        match (self.turning, self.slide) {
+            (Turning::Free, _) => "spherical",
+            (Turning::Axis { .. }, _) => "revolute",
+            (Turning::Locked { .. }, Some(_)) => "prismatic",
+            (Turning::Locked { .. }, None) => "fixed",
+        }
+    }
+
     /// The rows on the anchors, first in the joint's rows: three, or two
     /// for a slider.
     pub fn anchor_rows(&self) -> usize {

@@ -1,5 +1,5 @@
-//! Writers of a run's output files: `states.csv`, `impulses.csv`,
-//! `steps.csv` and `summary.json`. Each CSV row is complete per step and the
+//! Writers of a run's output files: `states.csv`, `joints.csv`,
+//! `impulses.csv`, `steps.csv` and `summary.json`. Each CSV row is complete per step and the
 //! writers are flushed regularly, so a run that stops early leaves readable
 //! files.
 
@@ -22,10 +22,19 @@ pub fn num(x: f64) -> String {
 pub use cosim_shared::{IMPULSES_HEADER, STATES_HEADER};
 pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw,projected,rung,refined,fallback,compliance,energy_refused,islands,largest_island,sleeping,lemke_islands,pgs_islands";
 
-/// The three CSV files of a run.
+/// Each joint's state, a row per joint beside each state's body rows:
+/// `position` and `rate` are a hinge's angle (rad, in (-pi, pi], zero at
+/// t = 0) and angular rate (rad/s) or a slider's offset (m) and speed
+/// (m/s), B relative to A about or along the axis (`engine::joint::
+/// coordinate`); empty for spherical and fixed joints. `anchor_error`
+/// (m) and `angle_error` (rad) are what the joint's rows hold to zero.
+pub const JOINTS_HEADER: &str = "step,t,joint,type,position,rate,anchor_error,angle_error";
+
+/// The CSV files of a run.
 pub struct Writers {
     dir: PathBuf,
     states: BufWriter<File>,
+    joints: BufWriter<File>,
     impulses: BufWriter<File>,
     steps: BufWriter<File>,
     line: String,
@@ -57,6 +66,7 @@ impl Writers {
         Ok(Writers {
             dir: dir.to_path_buf(),
             states: create(dir, "states.csv", STATES_HEADER)?,
+            joints: create(dir, "joints.csv", JOINTS_HEADER)?,
             impulses: create(dir, "impulses.csv", IMPULSES_HEADER)?,
             steps: create(dir, "steps.csv", STEPS_HEADER)?,
             line: String::new(),
@@ -82,7 +92,31 @@ impl Writers {
             }
             self.line.push('\n');
         }
-        self.states.write_all(self.line.as_bytes())
+        self.states.write_all(self.line.as_bytes())?;
+        self.joints(engine)
+    }
+
+    /// One row per joint of the engine's current state (`JOINTS_HEADER`).
+    fn joints(&mut self, engine: &Engine) -> io::Result<()> {
+        use crate::engine::joint;
+        use std::fmt::Write as _;
+        let s = engine.state();
+        self.line.clear();
+        for j in &engine.model().joints {
+            let (position, rate) = joint::coordinate(j, s)
+                .map_or((String::new(), String::new()), |(x, v)| (num(x), num(v)));
+            let _ = writeln!(
+                self.line,
+                "{},{},{},{},{position},{rate},{},{}",
+                s.step,
+                num(s.t),
+                j.name,
+                j.kind(),
+                num(joint::anchor_error(j, s)),
+                num(joint::angle_error(j, s)),
+            );
+        }
+        self.joints.write_all(self.line.as_bytes())
     }
 
     /// The impulses of the step just taken, where they are not zero.
@@ -167,6 +201,7 @@ impl Writers {
 
     pub fn flush(&mut self) -> io::Result<()> {
         self.states.flush()?;
+        self.joints.flush()?;
         self.impulses.flush()?;
         self.steps.flush()
     }

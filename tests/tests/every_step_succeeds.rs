@@ -9,7 +9,7 @@ use cosim_server::engine::{Engine, LadderCounts, Model, Turning};
 use cosim_shared::{Scene, SolverChoice};
 use cosim_tests::shipped_scene;
 
-const SHIPPED: [&str; 7] = [
+const SHIPPED: [&str; 8] = [
     "reference.toml",
     "friction.toml",
     "frictionless.toml",
@@ -17,6 +17,7 @@ const SHIPPED: [&str; 7] = [
     "joint_torques.toml",
     "joints.toml",
     "restitution.toml",
+    "slider.toml",
 ];
 
 /// Steps `steps` times; panics on a failed step or, with Lemke asked for,

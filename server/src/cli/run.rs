@@ -483,7 +483,7 @@ fn simulate(
             state.step as f64 / wall.max(1e-9)
         );
         println!(
-            "output       {}/{{states,impulses,steps}}.csv, summary.json",
+            "output       {}/{{states,joints,impulses,steps}}.csv, summary.json",
             writers.dir().display()
         );
     }
