@@ -14,6 +14,17 @@ fn run(args: &[&str]) -> Output {
         .expect("run cosim-server")
 }
 
+/// `run`, which must succeed (else its stderr is the failure).
+fn run_ok(args: &[&str]) -> Output {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 const GOOD: &str = r#"[sim]
 dt = 0.001
 steps = 50
@@ -126,18 +137,13 @@ fn every_validation_case_exits_2_naming_the_field() {
     // The good scene runs.
     let good = dir.path().join("good.toml");
     std::fs::write(&good, GOOD).unwrap();
-    let out = run(&[
+    run_ok(&[
         "run",
         good.to_str().unwrap(),
         "--quiet",
         "--out",
         dir.path().join("o").to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     for (what, from, to, field, line) in CASES {
         assert!(GOOD.contains(from), "{what}: pattern not in the scene");
         let path = dir.path().join(format!("{}.toml", what.replace(' ', "_")));
@@ -194,12 +200,7 @@ fn bad_options_exit_2_naming_the_option() {
 fn reference_run_writes_every_file() {
     let dir = TempDir::new("cli-reference");
     let out_dir = dir.path().join("out");
-    let out = run(&["run", "--steps", "300", "--out", out_dir.to_str().unwrap()]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = run_ok(&["run", "--steps", "300", "--out", out_dir.to_str().unwrap()]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         stdout.contains("reference") && stdout.contains("failures     0"),
@@ -256,7 +257,7 @@ fn reference_run_writes_every_file() {
 fn shadow_records_the_other_solvers_velocity_difference() {
     let dir = TempDir::new("cli-shadow");
     let out_dir = dir.path().join("out");
-    let out = run(&[
+    run_ok(&[
         "run",
         "--steps",
         "200",
@@ -265,11 +266,6 @@ fn shadow_records_the_other_solvers_velocity_difference() {
         "--out",
         out_dir.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let steps = std::fs::read_to_string(out_dir.join("steps.csv")).unwrap();
     let header: Vec<&str> = steps.lines().next().unwrap().split(',').collect();
     let col = header
@@ -309,7 +305,7 @@ fn joints_csv_gives_a_hinges_angle_as_the_states_show_it() {
         env!("CARGO_MANIFEST_DIR"),
         "/../examples/scenes/hinges.toml"
     );
-    let out = run(&[
+    run_ok(&[
         "run",
         scene,
         "--steps",
@@ -318,11 +314,6 @@ fn joints_csv_gives_a_hinges_angle_as_the_states_show_it() {
         "--out",
         out_dir.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let read = |name: &str| std::fs::read_to_string(out_dir.join(name)).unwrap();
     let (states, joints) = (read("states.csv"), read("joints.csv"));
     let mut rows = joints.lines();
