@@ -12,7 +12,8 @@ use nalgebra::{Matrix3, Vector3};
 /// expects of a torque command); body impulses act on the next step only.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Inputs {
-    /// Per joint: `+torque` on body_b, `-torque` on body_a (N m).
+    /// Per joint, its effort: `+torque` on body_b, `-torque` on body_a
+    /// (N m); for a slider a force (N) at B's anchor (`free_velocity`).
     pub joint_torque: Vec<Vector3<f64>>,
     /// Per body: linear and angular impulse (N s, N m s), world frame.
     pub body_impulse: Vec<(Vector3<f64>, Vector3<f64>)>,
@@ -103,12 +104,24 @@ pub fn free_velocity(
         nu_free[6 * i..6 * i + 3].copy_from_slice(v.as_slice());
         nu_free[6 * i + 3..6 * i + 6].copy_from_slice(w.as_slice());
     }
-    for (joint, tau) in model.joints.iter().zip(&inputs.joint_torque) {
-        let ang = tau * h;
+    for (joint, effort) in model.joints.iter().zip(&inputs.joint_torque) {
+        let (lin, ang) = (effort * h, effort * h);
+        // A slider's effort is a force at B's anchor, on both sides at
+        // that one point (so it has no moment of its own); else a torque.
+        let at = joint
+            .slide
+            .map(|_| crate::mlcp::anchor(joint.b, &joint.local_b, state).0);
         for (att, sign) in [(joint.b, 1.0), (joint.a, -1.0)] {
             if let Attachment::Body(i) = att {
-                let dw = minv[i].inv_i * ang * sign;
+                let (dv, dw) = match at {
+                    Some(p) => (
+                        lin * (sign * minv[i].inv_m),
+                        minv[i].inv_i * (p - state.bodies[i].x).cross(&(lin * sign)),
+                    ),
+                    None => (Vector3::zeros(), minv[i].inv_i * ang * sign),
+                };
                 for k in 0..3 {
+                    nu_free[6 * i + k] += dv[k];
                     nu_free[6 * i + 3 + k] += dw[k];
                 }
             }

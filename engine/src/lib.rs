@@ -371,8 +371,11 @@ impl Engine {
         &self.inputs
     }
 
-    /// Sets the held torque of joint `joint` (N m): `+torque` on body_b,
-    /// `-torque` on body_a, until changed.
+    /// Sets the held effort of joint `joint` until changed: a torque
+    /// (N m), `+torque` on body_b and `-torque` on body_a; for a slider a
+    /// force (N) on body_b at its anchor and its opposite on body_a there
+    /// (its part along the axis drives the slide). ROS's `effort`,
+    /// MuJoCo's generalised force.
     pub fn set_joint_torque(
         &mut self,
         joint: usize,

@@ -68,7 +68,9 @@ pub struct Joint {
     /// Anchor in A's body frame (a world point when A is the world).
     pub local_a: Vector3<f64>,
     pub local_b: Vector3<f64>,
-    /// Constant joint torque from the scene: the initial held input.
+    /// Constant joint effort from the scene, the initial held input: a
+    /// torque (N m), or for a slider a force (N) at B's anchor
+    /// (`applied::free_velocity`).
     pub torque: Vector3<f64>,
     pub turning: Turning,
     /// Prismatic: the unit sliding axis in A's frame (a world direction
@@ -423,7 +425,7 @@ impl Model {
                     b,
                     local_a: local(a, anchor),
                     local_b: local(b, anchor),
-                    torque: v3(j.torque),
+                    torque: v3(j.force.unwrap_or(j.torque)),
                     turning,
                     slide,
                     collide: j.collide,

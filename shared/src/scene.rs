@@ -387,8 +387,14 @@ pub struct JointDesc {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub axis: Option<[f64; 3]>,
     /// Constant joint torque: `+torque` on body_b, `-torque` on body_a.
+    /// Not for a prismatic joint, whose effort is a force.
     #[serde(default)]
     pub torque: [f64; 3],
+    /// `prismatic` only: constant force (N, world frame) on body_b at its
+    /// anchor, its opposite on body_a at the same point; its part along
+    /// the axis drives the slider (the joint holds the rest).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force: Option<[f64; 3]>,
     /// Whether the two bodies' shapes touch each other. MuJoCo and Drake
     /// leave a joint's two bodies out of contact (links overlap at their
     /// hinges); here the default is true, since the notes' scene has
@@ -636,6 +642,27 @@ impl Scene {
             }
             finite3(&j.anchor).map_err(|m| err(f("anchor"), m))?;
             finite3(&j.torque).map_err(|m| err(f("torque"), m))?;
+            match (j.kind, j.force) {
+                (JointKind::Prismatic, Some(force)) => {
+                    finite3(&force).map_err(|m| err(f("force"), m))?
+                }
+                (kind, Some(_)) => {
+                    return Err(err(
+                        f("force"),
+                        format!(
+                            "only a prismatic joint has a force (this one is {}: its effort is a torque)",
+                            kind.as_str()
+                        ),
+                    ))
+                }
+                (_, None) => {}
+            }
+            if j.kind == JointKind::Prismatic && j.torque != [0.0; 3] {
+                return Err(err(
+                    f("torque"),
+                    "a prismatic joint's effort is a force: give `force`".into(),
+                ));
+            }
             match (j.kind, j.axis) {
                 (kind @ (JointKind::Revolute | JointKind::Prismatic), None) => {
                     return Err(err(

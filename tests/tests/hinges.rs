@@ -155,14 +155,19 @@ fn a_fixed_joint_holds_two_bodies_as_one() {
     );
 }
 
-/// The new fields are validated like the rest: a hinge without an axis,
-/// a zero axis, an axis on a joint that has none, each named.
+/// The new fields are validated like the rest: a hinge or slider without
+/// an axis, a zero axis, an axis on a joint that has none, a force on a
+/// joint whose effort is a torque and the reverse, each named.
 #[test]
 fn a_joints_axis_is_checked_and_named() {
     let base = {
         let mut s = sim(1e-3, 10, [0.0, 0.0, -G]);
         s += &sphere("bob", R, M, [0.0, 0.0, -L], [0.0; 3], 0.0, 0.0);
         s
+    };
+    // A joint "h" of `kind` about `axis` with one more line.
+    let with = |kind: &str, axis: [f64; 3], line: &str| {
+        joint_of(kind, "h", "world", "bob", [0.0; 3], Some(axis)) + line + "\n"
     };
     for (joint, expect) in [
         (
@@ -176,6 +181,18 @@ fn a_joints_axis_is_checked_and_named() {
         (
             joint_of("prismatic", "h", "world", "bob", [0.0; 3], None),
             "a prismatic joint needs its axis",
+        ),
+        (
+            with("revolute", [0.0, 1.0, 0.0], "force = [1.0, 0.0, 0.0]"),
+            "joint \"h\".force: only a prismatic joint has a force",
+        ),
+        (
+            with("prismatic", [1.0, 0.0, 0.0], "torque = [1.0, 0.0, 0.0]"),
+            "joint \"h\".torque: a prismatic joint's effort is a force",
+        ),
+        (
+            with("prismatic", [1.0, 0.0, 0.0], "force = [nan, 0.0, 0.0]"),
+            "joint \"h\".force",
         ),
         (
             joint_of(

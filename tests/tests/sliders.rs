@@ -114,3 +114,55 @@ fn a_slider_on_a_spinning_body_keeps_the_momenta_and_slides_out() {
     assert!(off_axis < 1e-6, "left the spoke by {off_axis} m");
     assert!(turned < 1e-6, "the bead turned on the hub by {turned} rad");
 }
+
+/// A slider's effort is a force at B's anchor (its opposite on A there):
+/// between two free spheres in zero gravity, a force with parts along the
+/// axis and across it drives them apart at `f_u (1/m_A + 1/m_B)` and does
+/// nothing else. The pair starts at rest, so the momenta stay zero.
+#[test]
+fn a_slider_force_drives_the_slide_and_nothing_else() {
+    let (h, steps) = (1e-3, 500u64);
+    let (ma, mb, f) = (2.0, 1.0, [3.0, 0.5, -0.2]);
+    let mut s = sim(h, steps, [0.0; 3]);
+    s += &sphere("a", R, ma, [0.0; 3], [0.0; 3], 0.0, 0.0);
+    s += &sphere("b", R, mb, [0.2, 0.0, 0.0], [0.0; 3], 0.0, 0.0);
+    s += &joint_of(
+        "prismatic",
+        "push",
+        "a",
+        "b",
+        [0.1, 0.0, 0.0],
+        Some([1.0, 0.0, 0.0]),
+    );
+    s += &format!("force = [{:e}, {:e}, {:e}]\n", f[0], f[1], f[2]);
+    let mut e = engine(&s);
+    let joint = e.model().joints[0].clone();
+    let (mut momentum, mut spin) = (0.0f64, 0.0f64);
+    run(&mut e, steps, |e, _| {
+        let b = &e.state().bodies;
+        let p = b[0].v * ma + b[1].v * mb;
+        let l = b[0].x.cross(&(b[0].v * ma)) + b[1].x.cross(&(b[1].v * mb));
+        momentum = momentum.max(p.norm()).max(l.norm());
+        spin = spin.max(b[0].w.norm()).max(b[1].w.norm());
+    });
+    let a = f[0] * (1.0 / ma + 1.0 / mb);
+    let n = steps as f64;
+    let (x, v) = (h * h * a * n * (n + 1.0) / 2.0, n * h * a);
+    let (offset, rate) = coordinate(&joint, e.state()).expect("a slider has a coordinate");
+    assert!(
+        (rate - v).abs() < DEFAULT_PGS_TOLERANCE,
+        "rate {rate}, analytic {v}"
+    );
+    assert!(
+        (offset - x).abs() < DEFAULT_PGS_TOLERANCE * n * h,
+        "offset {offset}, analytic {x}"
+    );
+    // Internal impulses: round-off on momenta of order 1 N s.
+    assert!(momentum < 1e-12, "momenta moved by {momentum}");
+    assert!(
+        spin < DEFAULT_PGS_TOLERANCE,
+        "the pair turned at {spin} rad/s"
+    );
+    let y = e.state().bodies[1].x.y.abs();
+    assert!(y < 1e-9, "the sideways force moved b by {y} m");
+}

@@ -210,9 +210,10 @@ pub fn scene(seed: u64) -> String {
             ];
             joint(&format!("j{j}"), &format!("s{a}"), &format!("s{b}"), mid)
         };
-        match kinds.below(4) {
+        let kind = kinds.below(4);
+        match kind {
             0 => {}
-            kind @ (1 | 2) => {
+            1 | 2 => {
                 let axis = [
                     kinds.range(-1.0, 1.0),
                     kinds.range(-1.0, 1.0),
@@ -234,8 +235,10 @@ pub fn scene(seed: u64) -> String {
             text += "collide = false\n";
         }
         if rng.uniform() < 0.3 {
+            // A slider's effort is a force (N).
+            let effort = if kind == 2 { "force" } else { "torque" };
             text += &format!(
-                "torque = [{:e}, {:e}, {:e}]\n",
+                "{effort} = [{:e}, {:e}, {:e}]\n",
                 rng.range(-0.5, 0.5),
                 rng.range(-0.5, 0.5),
                 rng.range(-0.5, 0.5)
@@ -331,9 +334,25 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
         );
         for j in &m.joints {
             use crate::engine::Attachment;
+            // A slider's effort is a force at B's anchor, on both sides.
+            let at = j.slide.map(|_| match j.b {
+                Attachment::World => j.local_b,
+                Attachment::Body(i) => {
+                    let s = &engine.state().bodies[i];
+                    s.x + s.q * j.local_b
+                }
+            });
             for (att, sign) in [(j.a, -1.0), (j.b, 1.0)] {
                 if let Attachment::Body(i) = att {
-                    free[i].1 += m.bodies[i].inv_inertia * (sign * h * j.torque);
+                    let (b, s) = (&m.bodies[i], &engine.state().bodies[i]);
+                    let p = sign * h * j.torque;
+                    match at {
+                        Some(at) => {
+                            free[i].0 += p * b.inv_mass;
+                            free[i].1 += b.inv_inertia * (at - s.x).cross(&p);
+                        }
+                        None => free[i].1 += b.inv_inertia * p,
+                    }
                 }
             }
         }
