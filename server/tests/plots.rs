@@ -15,9 +15,15 @@ use std::process::Command;
 
 const BIN: &str = env!("CARGO_BIN_EXE_cosim-server");
 
-/// Every figure: the reference scene has joints and friction, so it
-/// draws them all.
-const FIGURES: [&str; 12] = cosim_server::plot::figures::STEMS;
+/// Every figure the reference scene draws: it has joints and friction,
+/// so all of them but the hinges' and sliders' coordinates (it has
+/// neither: `slider.toml` draws that one, below).
+fn figures() -> Vec<&'static str> {
+    let all = cosim_server::plot::figures::STEMS;
+    all.into_iter()
+        .filter(|&f| f != "joint_coordinates")
+        .collect()
+}
 fn run_plot(out: &Path) {
     let status = Command::new(BIN)
         .args([
@@ -36,7 +42,7 @@ fn run_plot(out: &Path) {
 }
 
 fn files(dir: &Path) -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = FIGURES
+    let mut v: Vec<PathBuf> = figures()
         .iter()
         .flat_map(|f| {
             [
@@ -55,7 +61,7 @@ fn figures_and_animation_decode_follow_the_trajectory_and_repeat() {
     let a = tmp.path().join("a");
     run_plot(&a);
 
-    for f in FIGURES {
+    for f in figures() {
         let png = image::open(a.join("plots").join(format!("{f}.png")))
             .expect("PNG decodes")
             .to_rgb8();
@@ -323,6 +329,7 @@ fn figures_leave_out_empty_groups_and_mark_a_failure() {
     assert!(!plots.join("friction_forces.png").exists());
     assert!(!plots.join("joint_forces.png").exists());
     assert!(!plots.join("joint_angles.png").exists());
+    assert!(!plots.join("joint_coordinates.png").exists());
 
     // The reference scene with a force that overflows the first step.
     let text = std::fs::read_to_string(scenes.join("reference.toml")).unwrap();
@@ -493,4 +500,34 @@ fn two_runs_overlay_in_the_chosen_figures_and_window() {
         err.contains("\"velocity\"") && err.contains("velocities"),
         "{err}"
     );
+}
+
+/// A scene with a hinge and a slider draws their coordinates from
+/// joints.csv (the panels' data: `joint_coordinates_draw_a_turning_hinge_
+/// unwrapped_and_a_slider_in_metres` in figures.rs), and a run without
+/// joints.csv (a recording) still draws the rest.
+#[test]
+fn a_hinge_and_a_slider_draw_their_coordinates() {
+    let tmp = TempDir::new("plots-coordinates");
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/scenes");
+    let out = tmp.path().join("slider");
+    let status = Command::new(BIN)
+        .arg("run")
+        .arg(scenes.join("slider.toml"))
+        .args(["--steps", "800", "--plot", "--quiet", "--out"])
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let png = out.join("plots").join("joint_coordinates.png");
+    let image = image::open(&png).expect("PNG decodes").to_rgb8();
+    // Four panels (hinge angle and rate, slider offset and speed): 260
+    // pixels each (`Options::size`).
+    assert!(image.height() >= 4 * 260, "{} pixels high", image.height());
+    std::fs::remove_file(out.join("joints.csv")).unwrap();
+    std::fs::remove_dir_all(out.join("plots")).unwrap();
+    let status = Command::new(BIN).arg("plot").arg(&out).status().unwrap();
+    assert!(status.success());
+    assert!(out.join("plots").join("positions.png").exists());
+    assert!(!out.join("plots").join("joint_coordinates.png").exists());
 }

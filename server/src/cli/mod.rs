@@ -254,7 +254,7 @@ pub struct PlotArgs {
     /// this one's thin over them), into DIR/compare/ unless --out says.
     pub other: Option<PathBuf>,
     /// Only these figures, comma-separated (positions, velocities,
-    /// quaternions, joint_angles, energy, normal_forces, friction_forces,
+    /// quaternions, joint_angles, joint_coordinates, energy, normal_forces, friction_forces,
     /// joint_forces, errors, timings, solver, lcp_size).
     #[arg(long)]
     pub only: Option<String>,

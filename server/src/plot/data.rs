@@ -1,5 +1,5 @@
-//! Reads a run's files back (`scene.toml`, `states.csv`, `impulses.csv`,
-//! `steps.csv`): plots are drawn from the files alone, so a recording made
+//! Reads a run's files back (`scene.toml`, `states.csv`, `joints.csv`,
+//! `impulses.csv`, `steps.csv`): plots are drawn from the files alone, so a recording made
 //! during a co-simulation is drawn exactly like an offline run.
 
 use super::PlotError;
@@ -22,6 +22,17 @@ pub struct JointEnds {
     pub body_b: String,
 }
 
+/// A hinge's or slider's coordinate from `joints.csv`, per recorded state
+/// (`t` as in [`RunData::t`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct JointCoordinate {
+    pub name: String,
+    /// `revolute` (rad, rad/s) or `prismatic` (m, m/s).
+    pub kind: String,
+    /// `(position, rate)` per recorded state.
+    pub values: Vec<(f64, f64)>,
+}
+
 /// Everything a figure or the animation needs.
 #[derive(Debug, Clone, Default)]
 pub struct RunData {
@@ -39,6 +50,9 @@ pub struct RunData {
     /// The scene's joints (from `scene.toml`; none where it is missing or
     /// does not parse, and then no joint angles are drawn).
     pub joints: Vec<JointEnds>,
+    /// The hinges' and sliders' coordinates (from `joints.csv`; none where
+    /// the file is missing, as in a recording of a co-simulation).
+    pub coordinates: Vec<JointCoordinate>,
     /// The first step report whose status says it failed: its time, the
     /// step that failed (one past the state it left unchanged, which its
     /// row names) and status.
@@ -54,6 +68,36 @@ fn parse(path: &str, line: usize, field: &str, text: &str) -> Result<f64, PlotEr
     text.trim()
         .parse::<f64>()
         .map_err(|_| PlotError::Read(format!("{path}:{line}: {field} = {text:?} is not a number")))
+}
+
+/// The rows of `joints.csv` with a coordinate (hinges and sliders), for
+/// the `states` recorded states (a partial last state is cut, as there).
+fn coordinates(text: &str, states: usize) -> Result<Vec<JointCoordinate>, PlotError> {
+    let mut out: Vec<JointCoordinate> = Vec::new();
+    for (k, line) in text.lines().enumerate().skip(1) {
+        let cols: Vec<&str> = line.split(',').collect();
+        if cols.len() != 8 || cols[4].is_empty() {
+            continue;
+        }
+        let value = |i: usize, field: &str| parse("joints.csv", k + 1, field, cols[i]);
+        let (position, rate) = (value(4, "position")?, value(5, "rate")?);
+        let c = match out.iter().position(|c| c.name == cols[2]) {
+            Some(i) => &mut out[i],
+            None => {
+                out.push(JointCoordinate {
+                    name: cols[2].to_string(),
+                    kind: cols[3].to_string(),
+                    values: Vec::new(),
+                });
+                out.last_mut().expect("just pushed")
+            }
+        };
+        c.values.push((position, rate));
+    }
+    for c in &mut out {
+        c.values.truncate(states);
+    }
+    Ok(out)
 }
 
 impl RunData {
@@ -158,6 +202,9 @@ impl RunData {
                 .or_insert_with(|| vec![None; nsteps]);
             series[step - 1] = Some(p);
         }
+        if let Ok(joints) = std::fs::read_to_string(dir.join("joints.csv")) {
+            data.coordinates = coordinates(&joints, data.t.len())?;
+        }
         if let Ok(scene) = cosim_shared::Scene::load(&dir.join("scene.toml")) {
             data.joints = scene
                 .joints
@@ -195,6 +242,9 @@ impl RunData {
         }
         for v in self.impulses.values_mut() {
             *v = pick(v, &keep_steps);
+        }
+        for c in &mut self.coordinates {
+            c.values = pick(&c.values, &keep_states);
         }
         self.first_failure = self.first_failure.filter(|f| inside(f.0));
         self

@@ -500,6 +500,61 @@ fn joint_angle_panels(run: &RunData) -> Vec<Panel> {
         .collect()
 }
 
+/// The hinges' angles and rates (deg, deg/s; the angle unwrapped across
+/// the file's (-180, 180] so that a turning hinge draws a continuous
+/// line) and the sliders' offsets and speeds (m, m/s), from joints.csv.
+fn joint_coordinate_panels(run: &RunData) -> Vec<Panel> {
+    let mut series: [Vec<Series>; 4] = Default::default();
+    let n = run.t.len();
+    for (k, c) in run.coordinates.iter().enumerate() {
+        let hinge = c.kind == "revolute";
+        let mut turns = 0.0;
+        let mut last: Option<f64> = None;
+        type Points = Vec<(f64, f64)>;
+        let (positions, rates): (Points, Points) = run
+            .t
+            .iter()
+            .zip(&c.values)
+            .take(n)
+            .map(|(&t, &(x, v))| {
+                if !hinge {
+                    return ((t, x), (t, v));
+                }
+                // A jump of more than pi between states is the wrap.
+                if let Some(l) = last {
+                    if x - l > std::f64::consts::PI {
+                        turns -= std::f64::consts::TAU;
+                    } else if l - x > std::f64::consts::PI {
+                        turns += std::f64::consts::TAU;
+                    }
+                }
+                last = Some(x);
+                ((t, (x + turns).to_degrees()), (t, v.to_degrees()))
+            })
+            .unzip();
+        let at = if hinge { 0 } else { 2 };
+        for (slot, points) in [(at, positions), (at + 1, rates)] {
+            series[slot].push(Series {
+                name: c.name.clone(),
+                color: color(k),
+                points,
+                thin: false,
+            });
+        }
+    }
+    let labels = [
+        "hinge angle (deg)",
+        "hinge rate (deg/s)",
+        "slider offset (m)",
+        "slider speed (m/s)",
+    ];
+    labels
+        .iter()
+        .zip(series)
+        .map(|(label, s)| Panel::new(*label, s))
+        .collect()
+}
+
 /// Force series (N: impulse over the step / h) of one kind, one per
 /// contact or joint, with gaps where it was not active.
 fn force_series(run: &RunData, kind: &str, h: f64) -> Vec<Series> {
@@ -564,11 +619,12 @@ fn norm(p: &[f64; 3]) -> f64 {
 }
 
 /// Every figure's file stem, in drawing order.
-pub const STEMS: [&str; 12] = [
+pub const STEMS: [&str; 13] = [
     "positions",
     "velocities",
     "quaternions",
     "joint_angles",
+    "joint_coordinates",
     "energy",
     "normal_forces",
     "friction_forces",
@@ -771,6 +827,11 @@ pub fn specs(run: &RunData) -> Vec<Spec> {
         "Joint rotations since the start: body_b relative to body_a, a rotation vector in body_a's frame",
         joint_angle_panels(run),
     );
+    put(
+        "joint_coordinates",
+        "Hinge angles and slider offsets (body_b relative to body_a, joints.csv)",
+        joint_coordinate_panels(run),
+    );
     // The midpoint total last and thin: it follows the end-of-step total
     // closely, and both stay visible.
     let energy = [
@@ -937,6 +998,7 @@ pub fn specs(run: &RunData) -> Vec<Spec> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::{PI, TAU};
 
     #[test]
     fn a_joint_angle_is_body_b_turning_relative_to_body_a_since_the_start() {
@@ -991,6 +1053,57 @@ mod tests {
         assert!(panels
             .iter()
             .all(|p| p.series.iter().all(|s| s.points[0].1.abs() < 1e-12)));
+    }
+
+    #[test]
+    fn joint_coordinates_draw_a_turning_hinge_unwrapped_and_a_slider_in_metres() {
+        use super::super::data::JointCoordinate;
+        // A hinge turning at 2 rad/s for 4 s (8 rad: past 180 deg twice),
+        // its angle as joints.csv wraps it; a slider at 0.1 m/s.
+        let t: Vec<f64> = (0..=400).map(|k| k as f64 * 0.01).collect();
+        let wrap = |a: f64| (a + PI).rem_euclid(TAU) - PI;
+        let run = RunData {
+            t: t.clone(),
+            coordinates: vec![
+                JointCoordinate {
+                    name: "hinge".into(),
+                    kind: "revolute".into(),
+                    values: t.iter().map(|&t| (wrap(2.0 * t), 2.0)).collect(),
+                },
+                JointCoordinate {
+                    name: "rail".into(),
+                    kind: "prismatic".into(),
+                    values: t.iter().map(|&t| (0.1 * t, 0.1)).collect(),
+                },
+            ],
+            ..Default::default()
+        };
+        let panels = joint_coordinate_panels(&run);
+        let labels: Vec<&str> = panels.iter().map(|p| p.ylabel.as_str()).collect();
+        assert_eq!(
+            labels,
+            [
+                "hinge angle (deg)",
+                "hinge rate (deg/s)",
+                "slider offset (m)",
+                "slider speed (m/s)"
+            ]
+        );
+        for (k, &t) in t.iter().enumerate() {
+            let at = |panel: usize| panels[panel].series[0].points[k];
+            assert!(
+                (at(0).1 - (2.0 * t).to_degrees()).abs() < 1e-9,
+                "t {t}: {:?}",
+                at(0)
+            );
+            assert!((at(1).1 - 2f64.to_degrees()).abs() < 1e-9);
+            assert!((at(2).1 - 0.1 * t).abs() < 1e-12 && (at(3).1 - 0.1).abs() < 1e-12);
+            assert_eq!(at(0).0, t);
+        }
+        // Each joint in its own panels only.
+        assert!(panels.iter().all(|p| p.series.len() == 1));
+        assert_eq!(panels[0].series[0].name, "hinge");
+        assert_eq!(panels[2].series[0].name, "rail");
     }
 
     #[test]
