@@ -85,3 +85,12 @@ pub fn force() -> Schema {
         &[("force", vector()), ("magnitude", number())],
     )
 }
+
+/// A hinge's angle (rad) and rate (rad/s) or a slider's offset (m) and
+/// speed (m/s), as joints.csv holds them.
+pub fn joint_coordinate() -> Schema {
+    object(
+        "cosim.JointCoordinate",
+        &[("position", number()), ("rate", number())],
+    )
+}

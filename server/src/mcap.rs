@@ -18,6 +18,9 @@
 //! - `/tf` (`foxglove.FrameTransforms`), one per state: `world` to each
 //!   body's frame (named after the body).
 //! - `/bodies/NAME` (`cosim.BodyState`), one per state.
+//! - `/joints/NAME` (`cosim.JointCoordinate`), one per state, for each
+//!   hinge and slider where the run has `joints.csv`: its `position`
+//!   (angle in rad or offset in m) and `rate`.
 //! - `/energy` (`cosim.Energy`) and `/solver` (`cosim.StepReport`), one
 //!   per step.
 //! - `/forces/KIND/NAME` (`cosim.Force`, N: the step's impulse over h),
@@ -97,6 +100,11 @@ fn states(
         .iter()
         .map(|b| format!("/bodies/{}", b.name))
         .collect();
+    let joint_topics: Vec<String> = run
+        .coordinates
+        .iter()
+        .map(|c| format!("/joints/{}", c.name))
+        .collect();
     for (i, &t) in run.t.iter().enumerate() {
         let poses: Vec<Pose> = run.bodies.iter().map(|b| body_pose(&b.rows[i])).collect();
         // Contact forces of the step that ended in this state.
@@ -125,6 +133,12 @@ fn states(
         for (body, topic) in run.bodies.iter().zip(&topics) {
             let msg = draw::body_state(&body.rows[i]);
             rec.put(topic, schema::body_state, t, &msg)?;
+        }
+        for (c, topic) in run.coordinates.iter().zip(&joint_topics) {
+            if let Some(&(position, rate)) = c.values.get(i) {
+                let msg = json!({ "position": position, "rate": rate });
+                rec.put(topic, schema::joint_coordinate, t, &msg)?;
+            }
         }
     }
     Ok(())
