@@ -564,6 +564,7 @@ impl Engine {
             early_matrix: false,
             max_penetration: 0.0,
             max_joint_error: 0.0,
+            max_joint_angle_error: 0.0,
             islands: 0,
             largest_island: 0,
             lemke_islands: 0,
@@ -973,6 +974,7 @@ impl Engine {
         report.max_penetration =
             measure::max_penetration(&self.model, &self.state, &mut ws.collision, &mut ws.measure);
         report.max_joint_error = measure::max_joint_error(&self.model, &self.state);
+        report.max_joint_angle_error = measure::max_joint_angle_error(&self.model, &self.state);
         timings.measure = lap.lap();
         timings.total += lap.total();
         report.timings = timings;

@@ -59,6 +59,14 @@ pub fn max_penetration(
     scratch.iter().fold(0.0f64, |a, g| a.max(-g.gap))
 }
 
+/// Largest rotation error of the hinges, sliders and fixed joints (rad).
+pub fn max_joint_angle_error(model: &Model, state: &State) -> f64 {
+    model
+        .joints
+        .iter()
+        .fold(0.0f64, |a, j| a.max(crate::joint::angle_error(j, state)))
+}
+
 /// Largest joint error `|psi_b|` (m; a slider's off its axis).
 pub fn max_joint_error(model: &Model, state: &State) -> f64 {
     model

@@ -160,7 +160,10 @@ pub struct StepReport {
     /// (kept or cut down): the inputs selected no contact it left out.
     pub early_matrix: bool,
     pub max_penetration: f64,
+    /// Largest anchor error (m) and rotation error (rad) of the joints
+    /// (`joint::anchor_error`, `joint::angle_error`).
     pub max_joint_error: f64,
+    pub max_joint_angle_error: f64,
     pub energy: Energy,
     pub timings: Timings,
 }

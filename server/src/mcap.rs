@@ -145,7 +145,7 @@ fn states(
 }
 
 /// The step report's fields on `/solver`.
-const REPORT_FIELDS: [&str; 8] = [
+const REPORT_FIELDS: [&str; 9] = [
     "pivots",
     "residual",
     "lcp_size",
@@ -153,6 +153,7 @@ const REPORT_FIELDS: [&str; 8] = [
     "active_contacts",
     "max_penetration",
     "max_joint_error",
+    "max_joint_angle_error",
     "t_total",
 ];
 

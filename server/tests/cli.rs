@@ -346,6 +346,21 @@ fn joints_csv_gives_a_hinges_angle_as_the_states_show_it() {
         turned = turned.max(angle.abs());
     }
     assert!(turned > 1.0, "the arm swung down ({turned} rad)");
+    // steps.csv's largest rotation error is joints.csv's, step by step.
+    let steps = read("steps.csv");
+    let header: Vec<&str> = steps.lines().next().unwrap().split(',').collect();
+    let col = header
+        .iter()
+        .position(|h| *h == "max_joint_angle_error")
+        .expect("the column");
+    for (k, line) in steps.lines().skip(1).enumerate() {
+        let reported: f64 = line.split(',').nth(col).unwrap().parse().unwrap();
+        let worst = rows[2 * (k + 1)..2 * (k + 2)]
+            .iter()
+            .map(|r| r[7].parse::<f64>().unwrap())
+            .fold(0.0f64, f64::max);
+        assert_eq!(reported, worst, "step {}", k + 1);
+    }
     for row in rows.iter().filter(|r| r[2] == "wrist") {
         assert_eq!((row[3], row[4], row[5]), ("fixed", "", ""));
         // Issue 17's bound for a fixed joint at h = 1e-3 (measured 1.0e-6

@@ -1972,9 +1972,12 @@ fn fox(m: tungstenite::Message) -> Option<Fox> {
 #[test]
 fn the_live_view_serves_foxglove_the_servers_states() {
     use tungstenite::client::IntoClientRequest;
+    // 1.5 s of real time: at 200 frames a second the view has 300 to
+    // send, and the check below asks for 10 (400 steps once gave fewer
+    // with the whole test suite loading both cores).
     let (server, dir, name) = serve_test(
         "view",
-        &["--controllers", "1", "--realtime", "1", "--steps", "400"],
+        &["--controllers", "1", "--realtime", "1", "--steps", "1500"],
     );
     // The view as `cosim view --listen 127.0.0.1:0 --rate 200` runs it.
     let (tx, rx) = std::sync::mpsc::channel();

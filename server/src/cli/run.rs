@@ -69,6 +69,7 @@ struct Tally {
     first_failure: Option<String>,
     max_penetration: f64,
     max_joint_error: f64,
+    max_joint_angle_error: f64,
     max_lcp_size: usize,
     pivots: u64,
     max_residual: f64,
@@ -82,6 +83,7 @@ impl Tally {
     fn add(&mut self, r: &StepReport) {
         self.max_penetration = self.max_penetration.max(r.max_penetration);
         self.max_joint_error = self.max_joint_error.max(r.max_joint_error);
+        self.max_joint_angle_error = self.max_joint_angle_error.max(r.max_joint_angle_error);
         self.max_lcp_size = self.max_lcp_size.max(r.lcp_size);
         self.pivots += r.pivots as u64;
         self.max_residual = self.max_residual.max(r.residual);
@@ -404,6 +406,7 @@ fn simulate(
         "first_failure": tally.first_failure,
         "max_penetration": tally.max_penetration,
         "max_joint_error": tally.max_joint_error,
+        "max_joint_angle_error": tally.max_joint_angle_error,
         "max_lcp_size": tally.max_lcp_size,
         "pivots": tally.pivots,
         "max_residual": tally.max_residual,
@@ -469,7 +472,10 @@ fn simulate(
                 .map_or(String::new(), |f| format!(" (first: {f})"))
         );
         println!("penetration  max {:.3e} m", tally.max_penetration);
-        println!("joint error  max {:.3e} m", tally.max_joint_error);
+        println!(
+            "joint error  max {:.3e} m, {:.3e} rad",
+            tally.max_joint_error, tally.max_joint_angle_error
+        );
         println!(
             "energy       {:.6} J -> {:.6} J (midpoint {:.6} -> {:.6})",
             energy_initial.total,

@@ -897,6 +897,15 @@ pub fn specs(run: &RunData) -> Vec<Spec> {
                     thin: false,
                 }],
             ),
+            Panel::new(
+                "joint rotation error (rad)",
+                vec![Series {
+                    name: "max joint rotation error".into(),
+                    color: color(5),
+                    points: run.step_series("max_joint_angle_error"),
+                    thin: false,
+                }],
+            ),
         ],
     );
     let stages = [
