@@ -134,18 +134,31 @@ pub fn anchor_error(joint: &Joint, state: &State) -> f64 {
     }
 }
 
-/// The impulse the joint's anchor rows put on A (N s, world frame), from
-/// their rows and impulses (B gets its opposite).
-pub fn anchor_impulse(joint: &Joint, rows: &[Row], impulses: &[f64]) -> Vector3<f64> {
-    rows.iter()
-        .zip(impulses)
-        .take(joint.anchor_rows())
-        .map(|(row, p)| match (&row.a, &row.b) {
-            (Some(a), _) => a.lin * *p,
-            (None, Some(b)) => -b.lin * *p,
-            (None, None) => Vector3::zeros(),
-        })
-        .sum()
+/// The impulses the joint's rows put on A (world frame), from its rows
+/// and their impulses: the anchor rows' force impulse (N s) and the
+/// rotation rows' torque impulse (N m s, a pure couple: the rows are
+/// `[0 ; p]` on A). B gets their opposites (the force at its anchor).
+pub fn impulses_on_a(
+    joint: &Joint,
+    rows: &[Row],
+    impulses: &[f64],
+) -> (Vector3<f64>, Vector3<f64>) {
+    let on_a = |row: &Row| match (&row.a, &row.b) {
+        (Some(a), _) => (a.lin, a.ang),
+        (None, Some(b)) => (-b.lin, -b.ang),
+        (None, None) => (Vector3::zeros(), Vector3::zeros()),
+    };
+    let anchors = joint.anchor_rows();
+    let mut out = (Vector3::zeros(), Vector3::zeros());
+    for (k, (row, p)) in rows.iter().zip(impulses).take(joint.rows()).enumerate() {
+        let (lin, ang) = on_a(row);
+        if k < anchors {
+            out.0 += lin * *p;
+        } else {
+            out.1 += ang * *p;
+        }
+    }
+    out
 }
 
 /// A hinge's or slider's coordinate and its rate: the hinge's angle

@@ -123,7 +123,11 @@ fn carry_guess(state: &State, m: &Mlcp, contacts: &[Contact], guess: &mut Vec<bo
 pub enum ImpulseKind {
     Normal,
     Friction,
+    /// A joint's anchor force impulse (N s).
     Joint,
+    /// A hinge's, slider's or fixed joint's rotation rows' torque impulse
+    /// (N m s, a couple).
+    JointTorque,
 }
 
 /// One side of an impulse: a body, a plane or the world.
@@ -896,22 +900,25 @@ impl Engine {
         // Filled below in the LCP's contact order, which is ascending id.
         self.state.warm_contacts.clear();
         for (j, joint) in self.model.joints.iter().enumerate() {
-            // The anchor's force impulse (the joint's anchor rows); a
-            // hinge's, slider's or fixed joint's torque rows are not
-            // reported.
+            // The anchor's force impulse and, for a joint with rotation
+            // rows, their torque impulse.
             let first = self.model.joint_start[j];
-            let p = joint::anchor_impulse(joint, &m.rows[first..], &m.p_b[first..]);
+            let (p, tau) = joint::impulses_on_a(joint, &m.rows[first..], &m.p_b[first..]);
             let party = |a: Attachment| match a {
                 Attachment::World => Party::World,
                 Attachment::Body(i) => Party::Body(i),
             };
-            ws.impulses.push(ImpulseRecord {
-                kind: ImpulseKind::Joint,
+            let record = |kind, impulse| ImpulseRecord {
+                kind,
                 index: j,
                 a: party(joint.a),
                 b: party(joint.b),
-                impulse: p,
-            });
+                impulse,
+            };
+            ws.impulses.push(record(ImpulseKind::Joint, p));
+            if joint.rows() > joint.anchor_rows() {
+                ws.impulses.push(record(ImpulseKind::JointTorque, tau));
+            }
         }
         let nd = m.nd;
         let mut friction = m.friction_of.iter().enumerate().peekable();

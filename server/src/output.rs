@@ -131,6 +131,7 @@ impl Writers {
             }
             let (kind, name) = match r.kind {
                 ImpulseKind::Joint => ("joint", model.joints[r.index].name.clone()),
+                ImpulseKind::JointTorque => ("joint_torque", model.joints[r.index].name.clone()),
                 ImpulseKind::Normal => ("normal", contact_name(model, r.a, r.b)),
                 ImpulseKind::Friction => ("friction", contact_name(model, r.a, r.b)),
             };

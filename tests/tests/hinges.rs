@@ -8,6 +8,18 @@ use cosim_tests::*;
 use nalgebra::Vector3;
 use std::f64::consts::{PI, TAU};
 
+/// A hinge about y at the origin from the world to a body "wheel".
+fn axle() -> String {
+    joint_of(
+        "revolute",
+        "axle",
+        "world",
+        "wheel",
+        [0.0; 3],
+        Some([0.0, 1.0, 0.0]),
+    )
+}
+
 const R: f64 = 0.05;
 const M: f64 = 1.0;
 const L: f64 = 0.5;
@@ -258,14 +270,7 @@ fn a_hinge_reports_its_angle_and_rate() {
     let mut s = sim(h, steps, [0.0; 3]);
     s += &sphere("wheel", R, M, [0.0, 0.0, -L], [-w * L, 0.0, 0.0], 0.0, 0.0);
     s += &format!("angular_velocity = [0.0, {w:e}, 0.0]\n");
-    s += &joint_of(
-        "revolute",
-        "axle",
-        "world",
-        "wheel",
-        [0.0; 3],
-        Some([0.0, 1.0, 0.0]),
-    );
+    s += &axle();
     let mut e = engine(&s);
     let joint = e.model().joints[0].clone();
     let (start, _) = coordinate(&joint, e.state()).expect("a hinge has a coordinate");
@@ -295,5 +300,46 @@ fn a_hinge_reports_its_angle_and_rate() {
     assert!(
         (integral - turn).abs() < 1e-5 * turn,
         "turned {integral} rad of {turn}"
+    );
+}
+
+/// A hinge's rotation rows carry the couple its axis does not let turn
+/// the body: a sphere hinged about y at its centre in zero gravity, with
+/// a joint torque of 0.4 N m about x and 0.3 N m about y. Each step
+/// reports the rows' torque impulse on A (the world) as exactly the x
+/// part over the step (B gets its opposite), and the sphere spins about y
+/// alone at 0.3 t / I.
+#[test]
+fn a_hinge_reports_the_couple_its_rotation_rows_carry() {
+    use cosim_server::engine::ImpulseKind;
+    let (h, steps) = (1e-3, 200u64);
+    let mut s = sim(h, steps, [0.0; 3]);
+    s += &sphere("wheel", R, M, [0.0; 3], [0.0; 3], 0.0, 0.0);
+    s += &axle();
+    s += "torque = [0.4, 0.3, 0.0]\n";
+    let mut e = engine(&s);
+    let mut worst = 0.0f64;
+    run(&mut e, steps, |e, _| {
+        let couple = e
+            .impulses()
+            .iter()
+            .find(|i| i.kind == ImpulseKind::JointTorque)
+            .expect("a hinge reports its couple")
+            .impulse;
+        worst = worst.max((couple - Vector3::new(0.4 * h, 0.0, 0.0)).norm());
+    });
+    // Round-off on impulses of 4e-4 N m s.
+    assert!(worst < 1e-15, "couple off by {worst} N m s");
+    let w = e.state().bodies[0].w;
+    let i = 0.4 * M * R * R;
+    let expected = 0.3 * h * steps as f64 / i;
+    assert!(
+        w.x.abs() < 1e-12 && w.z.abs() < 1e-12,
+        "turned off its axis: {w}"
+    );
+    assert!(
+        (w.y - expected).abs() < 1e-9 * expected,
+        "{} against {expected}",
+        w.y
     );
 }

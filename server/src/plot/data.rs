@@ -266,7 +266,7 @@ impl RunData {
         }
         self.bodies.retain(|b| names.contains(&b.name));
         self.impulses.retain(|(kind, name), _| {
-            kind == "joint" || name.split('/').any(|part| names.iter().any(|n| n == part))
+            kind.starts_with("joint") || name.split('/').any(|part| names.iter().any(|n| n == part))
         });
         Ok(self)
     }

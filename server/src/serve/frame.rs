@@ -52,6 +52,8 @@ pub fn fill(f: &mut StateFrame, engine: &Engine, report: Option<&StepReport>, ca
                     *j = r.impulse.into();
                 }
             }
+            // Not on the wire (protocol.md: a joint's anchor impulse only).
+            ImpulseKind::JointTorque => {}
             ImpulseKind::Normal | ImpulseKind::Friction => {
                 // The records of one contact are consecutive: normal, then
                 // friction.
