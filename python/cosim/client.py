@@ -310,9 +310,10 @@ class Controller:
         torques: Mapping[int, Sequence[float]] = {},
         impulses: Mapping[int, Tuple[Sequence[float], Sequence[float]]] = {},
     ):
-        """Answers the last state: joint torques (N m, world frame, held
-        until changed) by joint index, and one-step body impulses (linear
-        N s, angular N m s) by body index."""
+        """Answers the last state: joint efforts (world frame, held until
+        changed) by joint index, a torque in N m, or for a prismatic joint
+        a force in N at its body_b's anchor; and one-step body impulses
+        (linear N s, angular N m s) by body index."""
         state = self.last
         step = state.step if state is not None else 0
         self._sequence += 1

@@ -634,9 +634,10 @@ pub const SOLVER_SINGULAR: u32 = 3;
 pub const SOLVER_NOT_CONVERGED: u32 = 4;
 pub const SOLVER_OTHER: u32 = 5;
 
-/// A held joint torque (N m, world frame): `+torque` on body b, `-torque`
-/// on body a. [`TORQUE_WORDS`] words: `joint` (the low half of the first
-/// word), then the torque.
+/// A held joint effort (world frame): a torque (N m), `+torque` on body
+/// b and `-torque` on body a; for a prismatic joint a force (N) on body b
+/// at its anchor and its opposite on body a there. [`TORQUE_WORDS`]
+/// words: `joint` (the low half of the first word), then the effort.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct JointTorque {
