@@ -359,6 +359,7 @@ struct Recorder {
     /// frames come.
     mcap: Option<(Recording, Drawing)>,
     states: std::io::BufWriter<std::fs::File>,
+    joints: std::io::BufWriter<std::fs::File>,
     impulses: std::io::BufWriter<std::fs::File>,
     steps: std::io::BufWriter<std::fs::File>,
     last_step: Option<u64>,
@@ -373,6 +374,7 @@ impl Recorder {
         };
         Ok(Recorder {
             states: open("states.csv", cosim_shared::STATES_HEADER)?,
+            joints: open("joints.csv", cosim_shared::JOINTS_HEADER)?,
             impulses: open("impulses.csv", cosim_shared::IMPULSES_HEADER)?,
             steps: open(
                 "steps.csv",
@@ -418,6 +420,36 @@ impl Recorder {
         }
         let report = || schema::step_report(&view::SOLVER_FIELDS);
         rec.put("/solver", report, t, &view::solver_message(f))
+    }
+
+    /// The frame's joint coordinates: joints.csv rows (no errors: the
+    /// frames do not carry them) and `/joints/NAME` for the hinges and
+    /// sliders, as `run` writes them.
+    fn joint_rows(&mut self, f: &StateFrame) -> std::io::Result<()> {
+        let t = f.sim_time;
+        for (desc, c) in self.scene.joints.iter().zip(&f.joint_coordinates) {
+            let kind = desc.kind.as_str();
+            if c[0].is_nan() {
+                writeln!(self.joints, "{},{t},{},{kind},,,,", f.step, desc.name)?;
+                continue;
+            }
+            writeln!(
+                self.joints,
+                "{},{t},{},{kind},{},{},,",
+                f.step, desc.name, c[0], c[1]
+            )?;
+            if let Some((rec, _)) = self.mcap.as_mut() {
+                let msg = serde_json::json!({ "position": c[0], "rate": c[1] });
+                rec.put(
+                    &format!("/joints/{}", desc.name),
+                    schema::joint_coordinate,
+                    t,
+                    &msg,
+                )
+                .map_err(std::io::Error::other)?;
+            }
+        }
+        Ok(())
     }
 
     /// An impulse of the last step as a force on `/forces/KIND/NAME`.
@@ -470,6 +502,7 @@ impl Recorder {
             }
             writeln!(self.states)?;
         }
+        self.joint_rows(f)?;
         if f.step == 0 {
             return Ok(());
         }
@@ -529,6 +562,7 @@ impl Recorder {
 
     fn flush(&mut self) -> std::io::Result<()> {
         self.states.flush()?;
+        self.joints.flush()?;
         self.impulses.flush()?;
         self.steps.flush()
     }

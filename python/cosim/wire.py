@@ -6,7 +6,7 @@ import ctypes
 
 import numpy as np
 
-PROTOCOL_VERSION = 2
+PROTOCOL_VERSION = 3
 MAX_CONTROLLERS = 8
 MESSAGE_LEN = 120
 
@@ -27,7 +27,7 @@ STATUS_FELL_BACK = 256
 SLOT_JOINED, SLOT_MISSED, SLOT_ANSWERED = 1, 2, 4
 
 # Words (8 bytes) of each entry in a payload.
-BODY_WORDS, JOINT_WORDS, CONTACT_WORDS = 13, 3, 8
+BODY_WORDS, JOINT_WORDS, CONTACT_WORDS = 13, 5, 8
 TORQUE_WORDS, IMPULSE_WORDS = 4, 7
 
 
@@ -64,7 +64,7 @@ class StateHeader(ctypes.Structure):
 
     @staticmethod
     def type_name() -> str:
-        return "cosim::StateHeader.v2"
+        return "cosim::StateHeader.v3"
 
 
 class JointTorque(ctypes.Structure):
@@ -96,7 +96,7 @@ class InputHeader(ctypes.Structure):
 
     @staticmethod
     def type_name() -> str:
-        return "cosim::InputHeader.v2"
+        return "cosim::InputHeader.v3"
 
 
 class ControlRequest(ctypes.Structure):
@@ -113,7 +113,7 @@ class ControlRequest(ctypes.Structure):
 
     @staticmethod
     def type_name() -> str:
-        return "cosim::ControlRequest.v2"
+        return "cosim::ControlRequest.v3"
 
 
 class ControlResponse(ctypes.Structure):
@@ -137,7 +137,7 @@ class ControlResponse(ctypes.Structure):
 
     @staticmethod
     def type_name() -> str:
-        return "cosim::ControlResponse.v2"
+        return "cosim::ControlResponse.v3"
 
     def text(self) -> str:
         return bytes(self.message).split(b"\0")[0].decode("utf-8", "replace")
@@ -172,13 +172,16 @@ class BadFrameError(ValueError):
 class State:
     """A state frame copied out of shared memory: the header's fields and
     numpy arrays of the entries (protocol.md: the payload words are, in
-    order, body_count bodies of 13 words, joint_count joint impulses of 3,
+    order, body_count bodies of 13 words, joint_count joints of 5,
     contacts_carried contacts of 8).
 
     Arrays, one row per body: `positions` (m), `orientations` (unit
     quaternions, w, x, y, z), `linear_velocities` (m/s),
     `angular_velocities` (rad/s, world frame); `joint_impulses` (N s, on
-    each joint's body a over the last step); `contacts` (CONTACT_DTYPE)."""
+    each joint's body a over the last step); `joint_positions` and
+    `joint_rates` (a hinge's angle in rad and rate, a slider's offset in m
+    and speed; NaN for spherical and fixed joints); `contacts`
+    (CONTACT_DTYPE)."""
 
     def __init__(self, header: StateHeader, words: int, address: int):
         self.header = StateHeader.from_buffer_copy(header)
@@ -202,7 +205,10 @@ class State:
         self.orientations = bodies[:, 3:7]
         self.linear_velocities = bodies[:, 7:10]
         self.angular_velocities = bodies[:, 10:13]
-        self.joint_impulses = f[BODY_WORDS * nb :].reshape(nj, JOINT_WORDS)
+        joints = f[BODY_WORDS * nb :].reshape(nj, JOINT_WORDS)
+        self.joint_impulses = joints[:, 0:3]
+        self.joint_positions = joints[:, 3]
+        self.joint_rates = joints[:, 4]
         self.contacts = raw[8 * (BODY_WORDS * nb + JOINT_WORDS * nj) :].view(CONTACT_DTYPE)
 
     @property

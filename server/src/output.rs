@@ -19,16 +19,8 @@ pub fn num(x: f64) -> String {
     }
 }
 
-pub use cosim_shared::{IMPULSES_HEADER, STATES_HEADER};
+pub use cosim_shared::{IMPULSES_HEADER, JOINTS_HEADER, STATES_HEADER};
 pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw,projected,rung,refined,fallback,compliance,energy_refused,islands,largest_island,sleeping,lemke_islands,pgs_islands,max_joint_angle_error";
-
-/// Each joint's state, a row per joint beside each state's body rows:
-/// `position` and `rate` are a hinge's angle (rad, in (-pi, pi], zero at
-/// t = 0) and angular rate (rad/s) or a slider's offset (m) and speed
-/// (m/s), B relative to A about or along the axis (`engine::joint::
-/// coordinate`); empty for spherical and fixed joints. `anchor_error`
-/// (m) and `angle_error` (rad) are what the joint's rows hold to zero.
-pub const JOINTS_HEADER: &str = "step,t,joint,type,position,rate,anchor_error,angle_error";
 
 /// The CSV files of a run.
 pub struct Writers {

@@ -586,6 +586,16 @@ fn a_recording_matches_the_servers_own_files_and_plots() {
     let ours = positions(dir.path(), "lower");
     let theirs = positions(rec.path(), "lower");
     assert_eq!(ours, theirs, "the recording holds the server's states");
+    // joints.csv too, but for the errors the frames do not carry.
+    let joints = |d: &Path| -> Vec<String> {
+        let text = std::fs::read_to_string(d.join("joints.csv")).expect("joints.csv");
+        text.lines()
+            .map(|l| l.split(',').take(6).collect::<Vec<_>>().join(","))
+            .collect()
+    };
+    let (served, recorded) = (joints(dir.path()), joints(rec.path()));
+    assert!(served.len() > 2 * 400, "{} rows", served.len());
+    assert_eq!(served, recorded, "the recording's joints.csv");
     recorded_mcap_reads_back(rec.path(), theirs.len());
     let figures = cosim_server::plot::render(
         rec.path(),
@@ -879,6 +889,7 @@ fn the_python_package_reads_numpy_states_to_the_bit() {
     for f in &frames {
         assert_eq!(f["shape"], serde_json::json!([2, 3]));
         assert_eq!(f["joints"], serde_json::json!([2, 3]));
+        assert_eq!(f["joint_positions"], serde_json::json!(["nan", "nan"]));
         assert_eq!(f["contact_fields"][4], "normal");
         let step = f["step"].as_u64().unwrap();
         let row: Vec<f64> = text
@@ -2212,5 +2223,91 @@ fn the_live_view_serves_foxglove_the_servers_states() {
     assert!(
         close(xyz(&last["msg"]["position"]), at(&upper, t)),
         "{last}"
+    );
+}
+
+/// Issue 17: the state frame carries each joint's coordinate and rate
+/// (protocol 3). slider.toml served with a controller that pushes the
+/// carriage down its rail with a held force (a slider's effort): every
+/// frame's coordinates equal the server's joints.csv at that step to the
+/// bit, and the last one an offline run's with the same force.
+#[test]
+fn frames_carry_the_joints_coordinates() {
+    use cosim_server::engine::{joint, Engine, Model};
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../examples/scenes/slider.toml"
+    );
+    let steps = 300u64;
+    let (server, dir, name) = serve_test(
+        "joint-frames",
+        &[scene, "--controllers", "1", "--steps", &steps.to_string()],
+    );
+    let monitor = Monitor::open(&name, 1024).expect("monitor");
+    let mut c = Controller::join(&name, WaitMode::Block).expect("join");
+    let force = [-3.0, 0.0, 0.0];
+    answer_until_shutdown(&mut c, |c| {
+        let mut input = InputFrame::default();
+        input.push_torque(0, force);
+        c.send(input).expect("send");
+    });
+    let mut frames = std::collections::BTreeMap::new();
+    loop {
+        let f = monitor.next(Duration::from_secs(10)).expect("frame");
+        frames.insert(f.step, f.joint_coordinates.clone());
+        if f.status & STATUS_SHUTDOWN != 0 {
+            break;
+        }
+    }
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    let csv = std::fs::read_to_string(dir.path().join("joints.csv")).unwrap();
+    let mut compared = 0;
+    for row in csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+    {
+        let step: u64 = row[0].parse().unwrap();
+        let Some(coords) = frames.get(&step) else {
+            continue;
+        };
+        let k = usize::from(row[2] == "pivot");
+        let want = [
+            row[4].parse::<f64>().unwrap(),
+            row[5].parse::<f64>().unwrap(),
+        ];
+        assert_eq!(coords[k], want, "step {step}, {}", row[2]);
+        compared += 1;
+    }
+    assert!(compared >= 2 * 250, "{compared} rows compared");
+    // Offline, the same held force from the first step.
+    let text = std::fs::read_to_string(scene).unwrap();
+    let mut e = Engine::new(Model::from_scene(
+        &cosim_shared::Scene::parse(&text, scene).unwrap(),
+    ));
+    e.set_joint_torque(0, force.into()).unwrap();
+    for _ in 0..steps {
+        assert!(e.step().ok());
+    }
+    let rail = joint::coordinate(&e.model().joints[0], e.state()).unwrap();
+    assert_eq!(
+        frames[&steps][0],
+        [rail.0, rail.1],
+        "the served run is the offline one"
+    );
+    // The force sped the carriage up: farther than without it.
+    let mut free = Engine::new(Model::from_scene(
+        &cosim_shared::Scene::parse(&text, scene).unwrap(),
+    ));
+    for _ in 0..steps {
+        assert!(free.step().ok());
+    }
+    let unforced = joint::coordinate(&free.model().joints[0], free.state()).unwrap();
+    assert!(
+        rail.0 > unforced.0 + 0.01,
+        "{} against {}",
+        rail.0,
+        unforced.0
     );
 }

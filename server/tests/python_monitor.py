@@ -22,6 +22,8 @@ while True:
         "orientation": [repr(x) for x in s.orientations[1].tolist()],
         "angular_velocity": [repr(x) for x in s.angular_velocities[1].tolist()],
         "joints": list(s.joint_impulses.shape),
+        # The reference scene's spherical joints have no coordinate: NaN.
+        "joint_positions": [repr(x) for x in s.joint_positions.tolist()],
         "contacts": len(s.contacts),
         "contact_fields": list(s.contacts.dtype.names),
     }), flush=True)

@@ -8,6 +8,14 @@ pub mod wire;
 
 /// Header of `states.csv`, written by `run`, `serve` and `cosim record`.
 pub const STATES_HEADER: &str = "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz";
+/// Header of `joints.csv`, written by the same three: each joint's state
+/// beside each state's body rows. `position` and `rate` are a hinge's
+/// angle (rad, in (-pi, pi], zero at t = 0) and angular rate (rad/s) or a
+/// slider's offset (m) and speed (m/s), body b relative to body a about
+/// or along the axis; empty for spherical and fixed joints. `anchor_error`
+/// (m) and `angle_error` (rad) are what the joint's rows hold to zero
+/// (empty in a `cosim record` recording: the frames do not carry them).
+pub const JOINTS_HEADER: &str = "step,t,joint,type,position,rate,anchor_error,angle_error";
 /// Header of `impulses.csv`, written by the same three.
 pub const IMPULSES_HEADER: &str = "step,t,kind,name,body_a,body_b,px,py,pz";
 

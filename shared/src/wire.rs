@@ -19,15 +19,16 @@ use core::mem::MaybeUninit;
 use iceoryx2::prelude::ZeroCopySend;
 
 /// Version of the wire types (also in every `type_name`).
-pub const PROTOCOL_VERSION: u32 = 2;
+pub const PROTOCOL_VERSION: u32 = 3;
 
 /// Controllers that can be joined at once.
 pub const MAX_CONTROLLERS: usize = 8;
 
 /// Words of one [`BodyFrame`] in a state payload.
 pub const BODY_WORDS: usize = 13;
-/// Words of one joint impulse (`[f64; 3]`) in a state payload.
-pub const JOINT_WORDS: usize = 3;
+/// Words of one joint in a state payload: its impulse (`[f64; 3]`), then
+/// its coordinate and rate (`[f64; 2]`, NaN for a joint without one).
+pub const JOINT_WORDS: usize = 5;
 /// Words of one [`ContactFrame`] in a state payload.
 pub const CONTACT_WORDS: usize = 8;
 /// Words of one [`JointTorque`] in an input payload.
@@ -184,7 +185,7 @@ pub const SLOT_ANSWERED: u32 = 4;
 /// A joined controller as the state frame reports it.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::ControllerSlot.v2")]
+#[type_name("cosim::ControllerSlot.v3")]
 pub struct ControllerSlot {
     /// Controller id given at join (0: slot unused).
     pub id: u32,
@@ -252,7 +253,7 @@ impl core::fmt::Display for WireError {
 /// impulses, `contacts_carried` contacts.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::StateHeader.v2")]
+#[type_name("cosim::StateHeader.v3")]
 pub struct StateHeader {
     /// [`PROTOCOL_VERSION`].
     pub version: u32,
@@ -332,6 +333,12 @@ pub struct StateFrame {
     /// Joint impulses over the step (N s), world frame, on body a of each
     /// joint (body b receives the opposite), as in impulses.csv.
     pub joint_impulses: Vec<[f64; 3]>,
+    /// Per joint, beside its impulse: a hinge's angle (rad, zero at t = 0,
+    /// in (-pi, pi]) and rate (rad/s), or a slider's offset (m) and speed
+    /// (m/s), body b relative to body a (joints.csv's `position`, `rate`);
+    /// NaN for spherical and fixed joints. A joint missing here is sent
+    /// as NaN.
+    pub joint_coordinates: Vec<[f64; 2]>,
     /// The contacts with a non-zero impulse, as many as the frame carries.
     pub contacts: Vec<ContactFrame>,
     pub controllers: [ControllerSlot; MAX_CONTROLLERS],
@@ -354,6 +361,7 @@ impl Default for StateFrame {
             dt: 0.0,
             bodies: Vec::new(),
             joint_impulses: Vec::new(),
+            joint_coordinates: Vec::new(),
             contacts: Vec::new(),
             controllers: [ControllerSlot::default(); MAX_CONTROLLERS],
         }
@@ -506,6 +514,7 @@ impl StateFrame {
             dt,
             ref bodies,
             ref joint_impulses,
+            joint_coordinates: _,
             ref contacts,
             controllers,
         } = self;
@@ -539,13 +548,16 @@ impl StateFrame {
         )
     }
 
-    /// Writes the payload: bodies, joint impulses, contacts.
+    /// Writes the payload: bodies, joints (impulse, coordinate, rate),
+    /// contacts.
     pub fn encode(&self, sink: &mut impl WordSink) {
         for b in &self.bodies {
             b.encode(sink);
         }
-        for j in &self.joint_impulses {
+        for (k, j) in self.joint_impulses.iter().enumerate() {
             put_f64s(sink, j);
+            let c = self.joint_coordinates.get(k).copied();
+            put_f64s(sink, &c.unwrap_or([f64::NAN; 2]));
         }
         for c in &self.contacts {
             c.encode(sink);
@@ -590,6 +602,7 @@ impl StateFrame {
         self.controllers = controllers;
         self.bodies.clear();
         self.joint_impulses.clear();
+        self.joint_coordinates.clear();
         self.contacts.clear();
         let (nb, nj, nc) = (
             body_count as usize,
@@ -611,8 +624,11 @@ impl StateFrame {
         let (j, c) = rest.split_at(JOINT_WORDS * nj);
         self.bodies
             .extend(b.chunks_exact(BODY_WORDS).map(BodyFrame::decode));
-        self.joint_impulses
-            .extend(j.chunks_exact(JOINT_WORDS).map(f3));
+        for w in j.chunks_exact(JOINT_WORDS) {
+            self.joint_impulses.push(f3(&w[..3]));
+            self.joint_coordinates
+                .push([f64::from_bits(w[3]), f64::from_bits(w[4])]);
+        }
         self.contacts
             .extend(c.chunks_exact(CONTACT_WORDS).map(ContactFrame::decode));
         Ok(())
@@ -662,7 +678,7 @@ pub struct BodyImpulse {
 /// `impulse_count` impulses follow in the payload words.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::InputHeader.v2")]
+#[type_name("cosim::InputHeader.v3")]
 pub struct InputHeader {
     /// [`PROTOCOL_VERSION`].
     pub version: u32,
@@ -912,7 +928,7 @@ pub const ROLE_MONITOR: u32 = 2;
 
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::ControlRequest.v2")]
+#[type_name("cosim::ControlRequest.v3")]
 pub struct ControlRequest {
     /// [`PROTOCOL_VERSION`].
     pub version: u32,
@@ -945,7 +961,7 @@ pub const MESSAGE_LEN: usize = 120;
 
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("cosim::ControlResponse.v2")]
+#[type_name("cosim::ControlResponse.v3")]
 pub struct ControlResponse {
     pub version: u32,
     /// `RESP_*`.
@@ -1055,8 +1071,15 @@ mod tests {
                 angular_velocity: [-v, 1e300, 0.0],
             });
         }
-        for _ in 0..nj {
+        for k in 0..nj {
             f.joint_impulses.push([next(); 3]);
+            // A joint without a coordinate carries NaN.
+            let c = if k % 2 == 0 {
+                [next(), -next()]
+            } else {
+                [f64::NAN; 2]
+            };
+            f.joint_coordinates.push(c);
         }
         for i in 0..nc {
             let v = next();
@@ -1095,7 +1118,14 @@ mod tests {
             assert_eq!(words.len(), f.words());
             assert_eq!(words.len(), state_words(nb, nj, nc));
             back.read(&f.header(), &words).expect("well formed");
-            assert_eq!(back, f, "frame {k}");
+            // To the bit: NaN (a joint without a coordinate) is not equal
+            // to itself, so the read frame is compared by its words.
+            let mut again = Vec::new();
+            back.encode(&mut again);
+            assert_eq!(again, words, "frame {k}");
+            assert_eq!(back.header(), f.header(), "frame {k}");
+            assert_eq!(back.joint_coordinates.len(), nj);
+            assert!(nj < 2 || back.joint_coordinates[1][0].is_nan());
 
             let mut input = InputFrame {
                 step: k as u64,
@@ -1188,7 +1218,10 @@ mod tests {
     #[test]
     fn layouts_match_the_protocol_document() {
         assert_eq!(size_of::<BodyFrame>(), 8 * BODY_WORDS);
-        assert_eq!(size_of::<[f64; 3]>(), 8 * JOINT_WORDS);
+        assert_eq!(
+            size_of::<[f64; 3]>() + size_of::<[f64; 2]>(),
+            8 * JOINT_WORDS
+        );
         assert_eq!(size_of::<ContactFrame>(), 8 * CONTACT_WORDS);
         assert_eq!(size_of::<JointTorque>(), 8 * TORQUE_WORDS);
         assert_eq!(size_of::<BodyImpulse>(), 8 * IMPULSE_WORDS);
