@@ -84,23 +84,26 @@ fn stepping_allocates_nothing_after_warm_up() {
 
 /// The same with a hinge and a fixed joint (their rotation rows) and a
 /// contact between a jointed body and a free one: the shipped hinges
-/// scene.
+/// and slider scenes.
 #[test]
-fn hinges_and_fixed_joints_allocate_nothing_after_warm_up() {
-    let text = cosim_tests::shipped_scene("hinges.toml");
-    let scene = cosim_shared::Scene::parse(&text, "hinges.toml").expect("shipped scene");
-    for solver in [
-        cosim_shared::SolverChoice::Lemke,
-        cosim_shared::SolverChoice::Pgs,
+fn hinges_sliders_and_fixed_joints_allocate_nothing_after_warm_up() {
+    // And sliders: slider.toml's rail and pendulum run into a ball.
+    for (name, solver) in [
+        ("hinges.toml", cosim_shared::SolverChoice::Lemke),
+        ("hinges.toml", cosim_shared::SolverChoice::Pgs),
+        ("slider.toml", cosim_shared::SolverChoice::Lemke),
+        ("slider.toml", cosim_shared::SolverChoice::Pgs),
     ] {
+        let text = cosim_tests::shipped_scene(name);
+        let scene = cosim_shared::Scene::parse(&text, name).expect("shipped scene");
         let mut model = Model::from_scene(&scene);
         model.params.solver = solver;
         let (made, contacts) = second_pass_allocations(model, 3000);
-        assert!(contacts > 0, "the arm never touched anything");
+        assert!(contacts > 0, "{name}: the arm never touched anything");
         assert_eq!(
             made,
             0,
-            "{}: {made} allocations after warm-up",
+            "{name}, {}: {made} allocations after warm-up",
             solver.as_str()
         );
     }
