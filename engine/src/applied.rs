@@ -22,7 +22,7 @@ pub struct Inputs {
 impl Inputs {
     pub fn new(model: &Model) -> Inputs {
         Inputs {
-            joint_torque: model.joints.iter().map(|j| j.torque).collect(),
+            joint_torque: model.joints.iter().map(|j| j.effort).collect(),
             body_impulse: vec![(Vector3::zeros(), Vector3::zeros()); model.bodies.len()],
         }
     }
@@ -105,7 +105,7 @@ pub fn free_velocity(
         nu_free[6 * i + 3..6 * i + 6].copy_from_slice(w.as_slice());
     }
     for (joint, effort) in model.joints.iter().zip(&inputs.joint_torque) {
-        let (lin, ang) = (effort * h, effort * h);
+        let p = effort * h;
         // A slider's effort is a force at B's anchor, on both sides at
         // that one point (so it has no moment of its own); else a torque.
         let at = joint
@@ -114,11 +114,11 @@ pub fn free_velocity(
         for (att, sign) in [(joint.b, 1.0), (joint.a, -1.0)] {
             if let Attachment::Body(i) = att {
                 let (dv, dw) = match at {
-                    Some(p) => (
-                        lin * (sign * minv[i].inv_m),
-                        minv[i].inv_i * (p - state.bodies[i].x).cross(&(lin * sign)),
+                    Some(at) => (
+                        p * (sign * minv[i].inv_m),
+                        minv[i].inv_i * (at - state.bodies[i].x).cross(&(p * sign)),
                     ),
-                    None => (Vector3::zeros(), minv[i].inv_i * ang * sign),
+                    None => (Vector3::zeros(), minv[i].inv_i * p * sign),
                 };
                 for k in 0..3 {
                     nu_free[6 * i + k] += dv[k];

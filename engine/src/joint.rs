@@ -181,8 +181,9 @@ pub fn coordinate(joint: &Joint, state: &State) -> Option<(f64, f64)> {
         let (pa, ra) = anchor(joint.a, &joint.local_a, state);
         let (pb, rb) = anchor(joint.b, &joint.local_b, state);
         let d = pb - pa;
-        // d/dt (u . d) = (w_A x u) . d + u . (v_pB - v_pA); with the
-        // rotation locked the first term is w_A . (u x d), zero along u.
+        // d/dt (u . d) = (w_A x u) . d + u . (v_pB - v_pA), u turning
+        // with A; the first term is w_A . (u x d), zero while the slider
+        // keeps d along u.
         let (va, wa) = velocity(joint.a, &ra.map_or_else(Vector3::zeros, |(_, r)| r));
         let (vb, _) = velocity(joint.b, &rb.map_or_else(Vector3::zeros, |(_, r)| r));
         return Some((u.dot(&d), wa.cross(&u).dot(&d) + u.dot(&(vb - va))));

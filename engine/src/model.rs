@@ -71,7 +71,7 @@ pub struct Joint {
     /// Constant joint effort from the scene, the initial held input: a
     /// torque (N m), or for a slider a force (N) at B's anchor
     /// (`applied::free_velocity`).
-    pub torque: Vector3<f64>,
+    pub effort: Vector3<f64>,
     pub turning: Turning,
     /// Prismatic: the unit sliding axis in A's frame (a world direction
     /// for the world); the anchors may part along it only.
@@ -102,8 +102,8 @@ pub enum Turning {
 }
 
 impl Joint {
-    /// Constraint rows: three for the anchor, plus two (hinge) or three
-    /// (fixed) on the rotation.
+    /// Constraint rows: three for the anchor (two for a slider), plus two
+    /// (hinge) or three (fixed, slider) on the rotation.
     pub fn rows(&self) -> usize {
         self.anchor_rows()
             + match self.turning {
@@ -425,7 +425,7 @@ impl Model {
                     b,
                     local_a: local(a, anchor),
                     local_b: local(b, anchor),
-                    torque: v3(j.force.unwrap_or(j.torque)),
+                    effort: v3(j.force.unwrap_or(j.torque)),
                     turning,
                     slide,
                     collide: j.collide,

@@ -345,7 +345,7 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
             for (att, sign) in [(j.a, -1.0), (j.b, 1.0)] {
                 if let Attachment::Body(i) = att {
                     let (b, s) = (&m.bodies[i], &engine.state().bodies[i]);
-                    let p = sign * h * j.torque;
+                    let p = sign * h * j.effort;
                     match at {
                         Some(at) => {
                             free[i].0 += p * b.inv_mass;

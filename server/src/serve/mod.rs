@@ -287,7 +287,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         .model()
         .joints
         .iter()
-        .map(|j| j.torque.into())
+        .map(|j| j.effort.into())
         .collect();
     let mut s = Server {
         initial: engine.state().clone(),
