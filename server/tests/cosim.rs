@@ -2158,7 +2158,12 @@ fn the_live_view_serves_foxglove_the_servers_states() {
         summary(dir.path())
     );
     assert!(times.windows(2).all(|w| w[0] <= w[1]), "time goes back");
-    assert!(solver_steps.windows(2).all(|w| w[0] < w[1]));
+    // Steps never go back; one may come twice (the server publishes a
+    // step again after a join: protocol.md), and CI once showed it.
+    assert!(solver_steps.windows(2).all(|w| w[0] <= w[1]));
+    let mut distinct = solver_steps.clone();
+    distinct.dedup();
+    assert!(distinct.len() >= 10, "{} steps drawn", distinct.len());
     // Every drawn state is one the server wrote, to the last digit JSON
     // keeps: the sphere at the lower body's position, its size 2 r.
     let lower = positions(dir.path(), "lower");
