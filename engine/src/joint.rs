@@ -169,13 +169,15 @@ pub fn impulses_on_a(
 /// B relative to A (MuJoCo's hinge and slide `qpos`, `qvel`); the angle
 /// is in (-pi, pi] (a figure unwraps it).
 pub fn coordinate(joint: &Joint, state: &State) -> Option<(f64, f64)> {
-    let velocity = |att: Attachment, r: &Vector3<f64>| match att {
-        Attachment::World => (Vector3::zeros(), Vector3::zeros()),
-        Attachment::Body(i) => {
-            let b = &state.bodies[i];
-            (b.v + b.w.cross(r), b.w)
-        }
+    // A side's angular velocity, and the velocity of its anchor (lever
+    // arm `r` from `anchor`; the world's: zero).
+    let spin = |att: Attachment| body(att).map_or_else(Vector3::zeros, |i| state.bodies[i].w);
+    let point = |r: Option<(usize, Vector3<f64>)>| {
+        r.map_or_else(Vector3::zeros, |(i, r)| {
+            crate::contact::point_velocity(&state.bodies[i], &r)
+        })
     };
+    let (wa, wb) = (spin(joint.a), spin(joint.b));
     if let Some(axis) = joint.slide {
         let u = orientation(joint.a, state) * axis;
         let (pa, ra) = anchor(joint.a, &joint.local_a, state);
@@ -184,9 +186,10 @@ pub fn coordinate(joint: &Joint, state: &State) -> Option<(f64, f64)> {
         // d/dt (u . d) = (w_A x u) . d + u . (v_pB - v_pA), u turning
         // with A; the first term is w_A . (u x d), zero while the slider
         // keeps d along u.
-        let (va, wa) = velocity(joint.a, &ra.map_or_else(Vector3::zeros, |(_, r)| r));
-        let (vb, _) = velocity(joint.b, &rb.map_or_else(Vector3::zeros, |(_, r)| r));
-        return Some((u.dot(&d), wa.cross(&u).dot(&d) + u.dot(&(vb - va))));
+        return Some((
+            u.dot(&d),
+            wa.cross(&u).dot(&d) + u.dot(&(point(rb) - point(ra))),
+        ));
     }
     let Turning::Axis {
         a, zero_a, zero_b, ..
@@ -200,10 +203,6 @@ pub fn coordinate(joint: &Joint, state: &State) -> Option<(f64, f64)> {
     // coincided at t = 0 and are normal to the axis in each frame.
     let (ea, eb) = (qa * zero_a, qb * zero_b);
     let angle = u.dot(&ea.cross(&eb)).atan2(ea.dot(&eb));
-    let (wa, wb) = (
-        velocity(joint.a, &Vector3::zeros()).1,
-        velocity(joint.b, &Vector3::zeros()).1,
-    );
     Some((angle, u.dot(&(wb - wa))))
 }
 

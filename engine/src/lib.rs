@@ -508,7 +508,7 @@ impl Engine {
         self.projected = match project::deep_penetration(
             &ws.contacts,
             &ws.minv,
-            &self.model.joints,
+            &self.model.jointed,
             &self.model.params,
             &mut self.state,
             &mut self.lemke,

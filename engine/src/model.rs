@@ -309,6 +309,9 @@ pub struct Model {
     /// `collide = false` keeps out of contact (MuJoCo's parent-child
     /// filter, Drake's collision filter groups).
     pub excluded: Vec<(usize, usize)>,
+    /// Per body, whether it is a side of some joint (such a body never
+    /// sleeps, and the projection out of deep penetration leaves it).
+    pub jointed: Vec<bool>,
     pub params: Params,
     pub initial: Vec<InitialBody>,
 }
@@ -443,6 +446,14 @@ impl Model {
             .collect();
         excluded.sort_unstable();
         excluded.dedup();
+        let mut jointed = vec![false; scene.bodies.len()];
+        for j in &joints {
+            for side in [j.a, j.b] {
+                if let Attachment::Body(i) = side {
+                    jointed[i] = true;
+                }
+            }
+        }
         let mut joint_start = vec![0];
         for j in &joints {
             joint_start.push(joint_start[joint_start.len() - 1] + j.rows());
@@ -456,6 +467,7 @@ impl Model {
             joint_start,
             weld,
             excluded,
+            jointed,
             params: Params {
                 h: s.dt,
                 gravity: v3(s.gravity),

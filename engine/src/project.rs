@@ -38,7 +38,7 @@
 use super::applied::InvMass;
 use super::collision::Counterpart;
 use super::contact::Contact;
-use super::model::{Attachment, Joint, Params};
+use super::model::Params;
 use super::rows::Row;
 use super::solver::{Lcp, Lemke, LemkeError};
 use super::state::State;
@@ -83,7 +83,7 @@ pub struct Projection {
 pub fn deep_penetration(
     contacts: &[Contact],
     minv: &[InvMass],
-    joints: &[Joint],
+    jointed: &[bool],
     p: &Params,
     state: &mut State,
     lemke: &mut Lemke,
@@ -92,23 +92,11 @@ pub fn deep_penetration(
     if p.contact_compliance.is_some() {
         return Ok(0);
     }
-    ws.minv.clear();
-    ws.minv.extend_from_slice(minv);
-    for j in joints {
-        for a in [j.a, j.b] {
-            if let Attachment::Body(i) = a {
-                ws.minv[i] = InvMass {
-                    inv_m: 0.0,
-                    inv_i: Matrix3::zeros(),
-                };
-            }
-        }
-    }
-    let fixed = &ws.minv;
-    let movable = |c: &Contact| {
-        fixed[c.geom.a].inv_m > 0.0
-            || matches!(c.geom.b, Counterpart::Body(j) if fixed[j].inv_m > 0.0)
-    };
+    // A body moves here unless a joint holds it or it has no inverse
+    // mass (asleep).
+    let moves = |i: usize| !jointed[i] && minv[i].inv_m > 0.0;
+    let movable =
+        |c: &Contact| moves(c.geom.a) || matches!(c.geom.b, Counterpart::Body(j) if moves(j));
     let deep = contacts
         .iter()
         .filter(|c| c.geom.gap < -PENETRATION_SLOP && movable(c))
@@ -116,6 +104,18 @@ pub fn deep_penetration(
     if deep == 0 {
         return Ok(0);
     }
+    ws.minv.clear();
+    ws.minv.extend(
+        minv.iter()
+            .zip(jointed)
+            .map(|(&m, &on_joint)| match on_joint {
+                true => InvMass {
+                    inv_m: 0.0,
+                    inv_i: Matrix3::zeros(),
+                },
+                false => m,
+            }),
+    );
     // Every near contact takes part, so that pushing one out cannot push
     // a body into another.
     ws.rows.clear();

@@ -29,7 +29,7 @@
 use super::collision::Counterpart;
 use super::contact::Contact;
 use super::island::Islands;
-use super::model::{Attachment, Model};
+use super::model::Model;
 use super::state::State;
 use nalgebra::Vector3;
 
@@ -143,12 +143,13 @@ pub fn update(
             0
         };
     }
-    for j in &model.joints {
-        for a in [j.a, j.b] {
-            if let Attachment::Body(i) = a {
-                state.rest[i] = 0;
-            }
-        }
+    for (rest, _) in state
+        .rest
+        .iter_mut()
+        .zip(&model.jointed)
+        .filter(|(_, &j)| j)
+    {
+        *rest = 0;
     }
     // Steps at rest an island needs: `after` seconds, at least one step.
     let need = ((params.after / h).ceil() as u32).max(1);
