@@ -439,7 +439,7 @@ impl Recorder {
                 f.step, desc.name, c[0], c[1]
             )?;
             if let Some((rec, _)) = self.mcap.as_mut() {
-                let msg = serde_json::json!({ "position": c[0], "rate": c[1] });
+                let msg = draw::joint_coordinate(c[0], c[1]);
                 rec.put(
                     &format!("/joints/{}", desc.name),
                     schema::joint_coordinate,

@@ -301,6 +301,12 @@ pub fn force_message(f: &Vector3<f64>) -> Value {
     json!({ "force": vec3(f), "magnitude": f.norm() })
 }
 
+/// A `cosim.JointCoordinate` message: a hinge's angle or a slider's
+/// offset and its rate.
+pub fn joint_coordinate(position: f64, rate: f64) -> Value {
+    json!({ "position": position, "rate": rate })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

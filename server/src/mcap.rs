@@ -136,7 +136,7 @@ fn states(
         }
         for (c, topic) in run.coordinates.iter().zip(&joint_topics) {
             if let Some(&(position, rate)) = c.values.get(i) {
-                let msg = json!({ "position": position, "rate": rate });
+                let msg = draw::joint_coordinate(position, rate);
                 rec.put(topic, schema::joint_coordinate, t, &msg)?;
             }
         }

@@ -798,7 +798,31 @@ fn elevation_deg(x: [f64; 3]) -> f64 {
 /// Runs the Python controller of examples/python with `args`; its stdout
 /// and stderr, after asserting that it succeeded.
 fn python_controller(args: &[&str]) -> String {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/python/controller.py");
+    python_example("controller.py", args)
+}
+
+/// The shipped slider scene (a carriage on a prismatic rail with a
+/// hinged pendulum).
+const SLIDER: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../examples/scenes/slider.toml"
+);
+
+/// The number a controller printed after `label` (up to the next space).
+fn printed_after(text: &str, label: &str) -> f64 {
+    text.split(label)
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("no {label:?} number in {text}"))
+}
+
+/// Runs `script` of examples/python with `args`; its stdout and stderr,
+/// after asserting that it succeeded.
+fn python_example(script: &str, args: &[&str]) -> String {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../examples/python")
+        .join(script);
     let out = Command::new("python3")
         .arg(&script)
         .args(args)
@@ -831,12 +855,7 @@ fn the_python_controller_joins_and_answers_every_step() {
     assert_eq!(s["deadline_misses"], 0);
     // It read the frames right (it copies only the entries in use): the
     // elevation it printed for its last frame is the one in states.csv.
-    let printed: f64 = text
-        .split("elevation ")
-        .nth(1)
-        .and_then(|t| t.split(' ').next())
-        .and_then(|t| t.parse().ok())
-        .unwrap_or_else(|| panic!("no elevation in {text}"));
+    let printed = printed_after(&text, "elevation ");
     let rows = positions(dir.path(), "upper");
     assert!(
         rows[999..]
@@ -2239,10 +2258,7 @@ fn the_live_view_serves_foxglove_the_servers_states() {
 #[test]
 fn frames_carry_the_joints_coordinates() {
     use cosim_server::engine::{joint, Engine, Model};
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../examples/scenes/slider.toml"
-    );
+    let scene = SLIDER;
     let steps = 300u64;
     let (server, dir, name) = serve_test(
         "joint-frames",
@@ -2326,24 +2342,15 @@ fn frames_carry_the_joints_coordinates() {
 /// printed for its last frame is one the server wrote.
 #[test]
 fn a_python_pd_controller_holds_a_slider_at_its_target() {
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../examples/scenes/slider.toml"
-    );
+    let scene = SLIDER;
     let (server, dir, name) = serve_test(
         "py-slider",
         &[scene, "--controllers", "1", "--steps", "3000"],
     );
-    let script =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/python/slider_controller.py");
-    let out = Command::new("python3")
-        .arg(&script)
-        .args(["--name", &name, "--target", "0.5"])
-        .output()
-        .expect("run python3");
-    let text =
-        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{text}");
+    let text = python_example(
+        "slider_controller.py",
+        &["--name", &name, "--target", "0.5"],
+    );
     let (status, stderr) = server.finish();
     assert!(status.success(), "{stderr}");
     let csv = std::fs::read_to_string(dir.path().join("joints.csv")).unwrap();
@@ -2360,12 +2367,7 @@ fn a_python_pd_controller_holds_a_slider_at_its_target() {
         .map(|(_, x)| (x - 0.5).abs())
         .fold(0.0f64, f64::max);
     assert!(worst < 0.01, "the carriage strayed {worst} m from 0.5 m");
-    let printed: f64 = text
-        .split("rail offset ")
-        .nth(1)
-        .and_then(|t| t.split(' ').next())
-        .and_then(|t| t.parse().ok())
-        .unwrap_or_else(|| panic!("no offset in {text}"));
+    let printed = printed_after(&text, "rail offset ");
     assert!(
         rail[2990..].iter().any(|(_, x)| *x == printed),
         "printed {printed}, joints.csv {:?}",

@@ -4,11 +4,33 @@
 //! slide's travel: joint.rs).
 
 use cosim_server::engine::joint::{angle_error, coordinate};
+use cosim_server::engine::Engine;
 use cosim_shared::DEFAULT_PGS_TOLERANCE;
 use cosim_tests::*;
 use nalgebra::Vector3;
 
 const R: f64 = 0.05;
+
+/// The slider's offset and rate after `steps` steps of `h` from speed
+/// `v0` along it at constant acceleration `a`, as the symplectic Euler
+/// step gives them: `v_n = v0 + n h a`, `x_n = sum h v_k = n h v0 + h^2 a
+/// n (n + 1) / 2`. PGS stops within DEFAULT_PGS_TOLERANCE (m/s) of the
+/// answer; its error can add up over the run's time (Lemke's is
+/// round-off).
+fn assert_accelerates(e: &Engine, v0: f64, a: f64, h: f64, steps: u64) {
+    let n = steps as f64;
+    let (x, v) = (n * h * v0 + h * h * a * n * (n + 1.0) / 2.0, v0 + n * h * a);
+    let joint = &e.model().joints[0];
+    let (offset, rate) = coordinate(joint, e.state()).expect("a slider has a coordinate");
+    assert!(
+        (rate - v).abs() < DEFAULT_PGS_TOLERANCE,
+        "rate {rate}, analytic {v}"
+    );
+    assert!(
+        (offset - x).abs() < DEFAULT_PGS_TOLERANCE * n * h,
+        "offset {offset}, analytic {x}"
+    );
+}
 
 /// A frictionless sphere on a rail from the world, tilted 30 degrees down
 /// from the horizontal, thrown with a speed that has parts along the rail
@@ -35,24 +57,8 @@ fn a_body_on_a_rail_slides_down_it_at_g_sin_30() {
         off_axis = off_axis.max(r.max_joint_error);
         turned = turned.max(angle_error(&joint, e.state()));
     });
-    // Symplectic Euler from the speed along the rail, a = g sin 30:
-    // v_n = v_u + n h a, x_n = sum h v_k = n h v_u + h^2 a n (n + 1) / 2.
-    let a = G * 0.5;
-    let vu = Vector3::from(v0).dot(&u);
-    let n = steps as f64;
-    let (x, v) = (n * h * vu + h * h * a * n * (n + 1.0) / 2.0, vu + n * h * a);
-    let (offset, rate) = coordinate(&joint, e.state()).expect("a slider has a coordinate");
-    // PGS stops within DEFAULT_PGS_TOLERANCE (m/s) of the answer; its
-    // error can add up over the run's time (Lemke's is round-off).
-    let t = n * h;
-    assert!(
-        (rate - v).abs() < DEFAULT_PGS_TOLERANCE,
-        "rate {rate}, analytic {v}"
-    );
-    assert!(
-        (offset - x).abs() < DEFAULT_PGS_TOLERANCE * t,
-        "offset {offset}, analytic {x}"
-    );
+    // From the speed along the rail, at a = g sin 30.
+    assert_accelerates(&e, Vector3::from(v0).dot(&u), G * 0.5, h, steps);
     assert!(off_axis < 1e-9, "left the rail by {off_axis} m");
     assert!(turned < 1e-9, "turned by {turned} rad");
 }
@@ -136,7 +142,6 @@ fn a_slider_force_drives_the_slide_and_nothing_else() {
     );
     s += &format!("force = [{:e}, {:e}, {:e}]\n", f[0], f[1], f[2]);
     let mut e = engine(&s);
-    let joint = e.model().joints[0].clone();
     let (mut momentum, mut spin) = (0.0f64, 0.0f64);
     run(&mut e, steps, |e, _| {
         let b = &e.state().bodies;
@@ -145,18 +150,7 @@ fn a_slider_force_drives_the_slide_and_nothing_else() {
         momentum = momentum.max(p.norm()).max(l.norm());
         spin = spin.max(b[0].w.norm()).max(b[1].w.norm());
     });
-    let a = f[0] * (1.0 / ma + 1.0 / mb);
-    let n = steps as f64;
-    let (x, v) = (h * h * a * n * (n + 1.0) / 2.0, n * h * a);
-    let (offset, rate) = coordinate(&joint, e.state()).expect("a slider has a coordinate");
-    assert!(
-        (rate - v).abs() < DEFAULT_PGS_TOLERANCE,
-        "rate {rate}, analytic {v}"
-    );
-    assert!(
-        (offset - x).abs() < DEFAULT_PGS_TOLERANCE * n * h,
-        "offset {offset}, analytic {x}"
-    );
+    assert_accelerates(&e, 0.0, f[0] * (1.0 / ma + 1.0 / mb), h, steps);
     // Internal impulses: round-off on momenta of order 1 N s.
     assert!(momentum < 1e-12, "momenta moved by {momentum}");
     assert!(

@@ -335,13 +335,9 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
         for j in &m.joints {
             use crate::engine::Attachment;
             // A slider's effort is a force at B's anchor, on both sides.
-            let at = j.slide.map(|_| match j.b {
-                Attachment::World => j.local_b,
-                Attachment::Body(i) => {
-                    let s = &engine.state().bodies[i];
-                    s.x + s.q * j.local_b
-                }
-            });
+            let at = j
+                .slide
+                .map(|_| crate::engine::mlcp::anchor(j.b, &j.local_b, engine.state()).0);
             for (att, sign) in [(j.a, -1.0), (j.b, 1.0)] {
                 if let Attachment::Body(i) = att {
                     let (b, s) = (&m.bodies[i], &engine.state().bodies[i]);

@@ -505,7 +505,6 @@ fn joint_angle_panels(run: &RunData) -> Vec<Panel> {
 /// line) and the sliders' offsets and speeds (m, m/s), from joints.csv.
 fn joint_coordinate_panels(run: &RunData) -> Vec<Panel> {
     let mut series: [Vec<Series>; 4] = Default::default();
-    let n = run.t.len();
     for (k, c) in run.coordinates.iter().enumerate() {
         let hinge = c.kind == "revolute";
         let mut turns = 0.0;
@@ -515,7 +514,6 @@ fn joint_coordinate_panels(run: &RunData) -> Vec<Panel> {
             .t
             .iter()
             .zip(&c.values)
-            .take(n)
             .map(|(&t, &(x, v))| {
                 if !hinge {
                     return ((t, x), (t, v));
