@@ -17,6 +17,9 @@ pub struct Inputs {
     pub joint_torque: Vec<Vector3<f64>>,
     /// Per body: linear and angular impulse (N s, N m s), world frame.
     pub body_impulse: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Per joint, its motor's target rate (rad/s or m/s; held until
+    /// changed, the scene's at first; 0 and unread without a motor).
+    pub motor_speed: Vec<f64>,
 }
 
 impl Inputs {
@@ -24,6 +27,11 @@ impl Inputs {
         Inputs {
             joint_torque: model.joints.iter().map(|j| j.effort).collect(),
             body_impulse: vec![(Vector3::zeros(), Vector3::zeros()); model.bodies.len()],
+            motor_speed: model
+                .joints
+                .iter()
+                .map(|j| j.motor.map_or(0.0, |m| m.speed))
+                .collect(),
         }
     }
 
@@ -38,9 +46,22 @@ impl Inputs {
 /// A bad input, refused before it reaches the step.
 #[derive(Debug, Clone, PartialEq)]
 pub enum InputError {
-    UnknownJoint { index: usize, joints: usize },
-    UnknownBody { index: usize, bodies: usize },
-    NonFinite { what: &'static str, index: usize },
+    UnknownJoint {
+        index: usize,
+        joints: usize,
+    },
+    UnknownBody {
+        index: usize,
+        bodies: usize,
+    },
+    /// A motor target for a joint without a motor.
+    NoMotor {
+        index: usize,
+    },
+    NonFinite {
+        what: &'static str,
+        index: usize,
+    },
 }
 
 impl std::fmt::Display for InputError {
@@ -51,6 +72,9 @@ impl std::fmt::Display for InputError {
             }
             InputError::UnknownBody { index, bodies } => {
                 write!(f, "unknown body index {index} (the scene has {bodies})")
+            }
+            InputError::NoMotor { index } => {
+                write!(f, "joint {index} has no motor (the scene gives it none)")
             }
             InputError::NonFinite { what, index } => {
                 write!(f, "{what} {index} is not finite (NaN or infinite)")

@@ -36,6 +36,19 @@ pub struct Contact {
     pub v_n: f64,
     /// Whether the contact has rows in this step's LCP.
     pub in_lcp: bool,
+    /// A joint's limit rather than a touch of two shapes (`joint::limits`).
+    pub limit: Option<Limit>,
+}
+
+/// A joint limit as a contact: one unilateral row, no friction, the
+/// coordinate's distance to the limit as its gap (joint.rs, `limits`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Limit {
+    pub joint: usize,
+    /// The upper limit (else the lower).
+    pub upper: bool,
+    /// A hinge's: the row turns about the normal (`Row::contact`).
+    pub angular: bool,
 }
 
 /// `(cos, sin)` of friction direction `j` of `n_d`: `d_j = cos t1 + sin t2`.
@@ -66,7 +79,7 @@ pub fn point_velocity(b: &BodyState, r: &Vector3<f64>) -> Vector3<f64> {
 pub fn relative_velocity(state: &State, g: &Geometry) -> Vector3<f64> {
     let va = point_velocity(&state.bodies[g.a], &g.r_a);
     let vb = match g.b {
-        Counterpart::Plane(_) => Vector3::zeros(),
+        Counterpart::Plane(_) | Counterpart::World => Vector3::zeros(),
         Counterpart::Body(j) => point_velocity(&state.bodies[j], &g.r_b),
     };
     va - vb
@@ -95,6 +108,8 @@ pub fn build(model: &Model, state: &State, geoms: &[Geometry], out: &mut Vec<Con
         let (mu_b, e_b) = match g.b {
             Counterpart::Plane(p) => (model.planes[p].friction, model.planes[p].restitution),
             Counterpart::Body(j) => (model.bodies[j].friction, model.bodies[j].restitution),
+            // Collision lists no contact with the world itself.
+            Counterpart::World => (0.0, 0.0),
         };
         let v_rel = relative_velocity(state, g);
         let v_n = v_rel.dot(&g.normal);
@@ -119,6 +134,7 @@ pub fn build(model: &Model, state: &State, geoms: &[Geometry], out: &mut Vec<Con
             t2,
             v_n,
             in_lcp: false,
+            limit: None,
         });
     }
 }

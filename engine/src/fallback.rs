@@ -117,8 +117,9 @@ pub struct Solved {
     /// A rigid answer was found but refused by the energy check.
     pub energy_refused: bool,
     /// The kinetic energy over the free motion's that the answer was
-    /// allowed (J): the energy check's bound for a rigid answer, zero for a
-    /// fallback (which never adds energy).
+    /// allowed (J): the energy check's bound for a rigid answer; for a
+    /// fallback, which adds no energy of its own, the motors' work
+    /// (`Mlcp::motor_work`, zero without motors).
     pub allowance: f64,
 }
 
@@ -231,7 +232,7 @@ pub fn solve(
                     info: relaxed,
                     fallback: Some(Fallback::Relaxed),
                     energy_refused: true,
-                    allowance: 0.0,
+                    allowance: m.motor_work(),
                 });
             }
             energy_refused = true;
@@ -249,7 +250,7 @@ pub fn solve(
             info,
             fallback: Some(Fallback::Relaxed),
             energy_refused,
-            allowance: 0.0,
+            allowance: m.motor_work(),
         });
     }
     let n = m.lcp_size();
@@ -279,7 +280,7 @@ pub fn solve(
                 info,
                 fallback: Some(Fallback::Compliant { eps }),
                 energy_refused,
-                allowance: 0.0,
+                allowance: m.motor_work(),
             });
         }
     }

@@ -41,6 +41,11 @@ impl Groups {
         self.len() == 0
     }
 
+    /// The island of row `k` of the last [`Islands::group`].
+    pub fn island_of_row(&self, k: usize) -> usize {
+        self.of_row[k] as usize
+    }
+
     /// The rows of island `g` (indices into the problem's rows).
     pub fn rows_of(&self, g: usize) -> &[u32] {
         &self.rows[self.start[g] as usize..self.start[g + 1] as usize]
@@ -138,7 +143,7 @@ impl Islands {
         // A row on one body ties it to something static, as a plane does.
         let links = rows.iter().filter_map(|row| match (row.a, row.b) {
             (Some(a), Some(b)) => Some((a.body, Counterpart::Body(b.body))),
-            (Some(j), None) | (None, Some(j)) => Some((j.body, Counterpart::Plane(usize::MAX))),
+            (Some(j), None) | (None, Some(j)) => Some((j.body, Counterpart::World)),
             (None, None) => None,
         });
         let summary = self.partition(bodies, links);

@@ -180,7 +180,7 @@ pub fn solve(
             },
             fallback: Some(Fallback::Relaxed),
             energy_refused: true,
-            allowance: 0.0,
+            allowance: m.motor_work(),
         };
     }
     // From zero impulses: a descent of the kinetic energy at every update.
@@ -210,7 +210,7 @@ pub fn solve(
         },
         fallback: Some(Fallback::Relaxed),
         energy_refused: true,
-        allowance: 0.0,
+        allowance: m.motor_work(),
     }
 }
 
@@ -238,7 +238,11 @@ fn warm_start(m: &mut Mlcp, state: &State, step: Step) {
     if !p.skips.warm_start {
         return;
     }
-    m.lambda[..m.nb].copy_from_slice(&state.warm_joint);
+    m.lambda[..m.nb].copy_from_slice(&state.warm_joint[..m.nb]);
+    // The motors' impulses follow the joints' in the state, and their
+    // rows the friction rows here.
+    let motors = m.nb + m.nc + m.nf * m.nd;
+    m.lambda[motors..motors + m.nm].copy_from_slice(&state.warm_joint[m.nb..]);
     for (i, &ci) in m.lcp_contacts.iter().enumerate() {
         if m.held.get(i) != Some(&true) {
             m.lambda[m.nb + i] = state.warm(step.contacts[ci].id).map_or(0.0, |w| w.normal);
@@ -302,6 +306,8 @@ fn run(
         circular: step.params.friction_cone == FrictionCone::Circular,
         groups: step.groups,
         iterate: &split.rest,
+        motor_row: &m.motor_row,
+        motor_cap: &m.motor_cap,
     };
     solvers
         .pgs

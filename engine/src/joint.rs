@@ -45,7 +45,8 @@ fn orientation(att: Attachment, state: &State) -> UnitQuaternion<f64> {
     }
 }
 
-fn body(att: Attachment) -> Option<usize> {
+/// A side's body (none for the world).
+pub fn body(att: Attachment) -> Option<usize> {
     match att {
         Attachment::World => None,
         Attachment::Body(i) => Some(i),

@@ -19,9 +19,11 @@ pub mod integrate;
 pub mod island;
 pub mod iterative;
 pub mod joint;
+pub mod limit;
 pub mod measure;
 pub mod mlcp;
 pub mod model;
+pub mod motor;
 pub mod project;
 pub mod prune;
 pub mod report;
@@ -77,15 +79,23 @@ fn matrix_free(p: &model::Params, contacts: &[Contact]) -> bool {
 /// `full = true` holds the pruned one's contacts plus inactive ones, and
 /// gets the same support, hence the same answer, where the guess holds.
 fn carry_guess(state: &State, m: &Mlcp, contacts: &[Contact], guess: &mut Vec<bool>) -> bool {
-    let (nc, nd) = (m.nc, m.nd);
+    let (nc, nd, nm) = (m.nc, m.nd, m.nm);
     guess.clear();
     guess.resize(m.lcp_size(), false);
     let prev = &state.warm_lcp;
     let prev_nf = prev.iter().filter(|&&(_, f)| f).count();
-    if prev.is_empty() || state.warm_active.len() != prev.len() + prev_nf * (nd + 1) {
+    // The last LCP: [p_n; p_f; p_m; s; s_m], the motors the same ones.
+    let prev_rows = prev.len() + prev_nf * nd + 2 * nm;
+    if state.warm_active.len() != prev_rows + prev_nf + nm || prev.len() + nm == 0 {
         return false;
     }
-    let mut any = false;
+    // Every motor is in every step's LCP: its pair and slack carry over.
+    for k in 0..nm {
+        let (src, dst) = (prev.len() + prev_nf * nd + 2 * k, m.motor_pair(k));
+        guess[dst..dst + 2].copy_from_slice(&state.warm_active[src..src + 2]);
+        guess[m.contact_rows() + m.nf + k] = state.warm_active[prev_rows + prev_nf + k];
+    }
+    let mut any = nm > 0;
     let mut friction = m.friction_of.iter().enumerate().peekable();
     // Both lists ascend by id (the LCP's contacts are in the contact
     // list's canonical order): one merge, O(n), where a search per contact
@@ -110,7 +120,7 @@ fn carry_guess(state: &State, m: &Mlcp, contacts: &[Contact], guess: &mut Vec<bo
             // The last step's friction block of contact j.
             let (src, dst) = (prev.len() + pf * nd, nc + f * nd);
             guess[dst..dst + nd].copy_from_slice(&state.warm_active[src..src + nd]);
-            let (src_s, dst_s) = (prev.len() + prev_nf * nd + pf, m.contact_rows() + f);
+            let (src_s, dst_s) = (prev_rows + pf, m.contact_rows() + f);
             guess[dst_s] = state.warm_active[src_s];
         }
         any = true;
@@ -128,6 +138,11 @@ pub enum ImpulseKind {
     /// A hinge's, slider's or fixed joint's rotation rows' torque impulse
     /// (N m s, a couple).
     JointTorque,
+    /// A joint limit's impulse on A: a couple (N m s) about a hinge's
+    /// axis, a force impulse (N s) along a slider's.
+    JointLimit,
+    /// A joint motor's impulse on A, as a limit's (`motor.rs`).
+    JointMotor,
 }
 
 /// One side of an impulse: a body, a plane or the world.
@@ -234,6 +249,7 @@ impl Workspace {
         };
         collision::detect(model, state, listing, &mut self.collision, &mut self.geoms);
         contact::build(model, state, &self.geoms, &mut self.contacts);
+        limit::limits(model, state, &mut self.contacts);
         if sleep::any_asleep(state) {
             sleep::drop_sleeping(state, &mut self.contacts);
         }
@@ -399,6 +415,30 @@ impl Engine {
             });
         }
         self.inputs.joint_torque[joint] = torque;
+        Ok(())
+    }
+
+    /// Sets the target rate of joint `joint`'s motor until changed (rad/s
+    /// for a hinge, m/s for a slider; `motor.rs`): Rapier's
+    /// `set_motor_velocity`, ODE's `dParamVel`.
+    pub fn set_motor_speed(&mut self, joint: usize, speed: f64) -> Result<(), InputError> {
+        let joints = self.model.joints.len();
+        if joint >= joints {
+            return Err(InputError::UnknownJoint {
+                index: joint,
+                joints,
+            });
+        }
+        if self.model.joints[joint].motor.is_none() {
+            return Err(InputError::NoMotor { index: joint });
+        }
+        if !speed.is_finite() {
+            return Err(InputError::NonFinite {
+                what: "motor speed of joint",
+                index: joint,
+            });
+        }
+        self.inputs.motor_speed[joint] = speed;
         Ok(())
     }
 
@@ -666,6 +706,7 @@ impl Engine {
                     )
                     .map_err(StepError::Mlcp)?;
                 report.early_matrix |= report.resolves == 0 && !canonical && how != Assembly::Built;
+                ws.mlcp.set_motor_speeds(model, &self.inputs.motor_speed);
                 ws.mlcp.rhs(&ws.nu_free, &ws.contacts, p, Offsets::Full);
                 report.regularized += usize::from(ws.mlcp.joint_regularized);
             }
@@ -876,10 +917,28 @@ impl Engine {
     /// The step's impulses as records, from the solved mLCP; also keeps
     /// them as the next step's warm start.
     fn record_impulses(&mut self) {
+        let party = |a: Attachment| match a {
+            Attachment::World => Party::World,
+            Attachment::Body(i) => Party::Body(i),
+        };
         let ws = &mut self.ws;
         let m = &ws.mlcp;
         ws.impulses.clear();
-        self.state.warm_joint.copy_from_slice(&m.p_b);
+        self.state.warm_joint[..m.nb].copy_from_slice(&m.p_b);
+        for (k, &j) in self.model.motors.iter().enumerate() {
+            let p = m.motor_impulse(k);
+            self.state.warm_joint[m.nb + k] = p;
+            if p != 0.0 {
+                let joint = &self.model.joints[j];
+                ws.impulses.push(ImpulseRecord {
+                    kind: ImpulseKind::JointMotor,
+                    index: j,
+                    a: party(joint.a),
+                    b: party(joint.b),
+                    impulse: motor::impulse_on_a(&m.motor_axis[k], p),
+                });
+            }
+        }
         self.state.warm_lcp.clear();
         self.state.warm_active.clear();
         self.state
@@ -904,10 +963,6 @@ impl Engine {
             // rows, their torque impulse.
             let first = self.model.joint_start[j];
             let (p, tau) = joint::impulses_on_a(joint, &m.rows[first..], &m.p_b[first..]);
-            let party = |a: Attachment| match a {
-                Attachment::World => Party::World,
-                Attachment::Body(i) => Party::Body(i),
-            };
             let record = |kind, impulse| ImpulseRecord {
                 kind,
                 index: j,
@@ -927,6 +982,7 @@ impl Engine {
             let b = match c.geom.b {
                 Counterpart::Plane(p) => Party::Plane(p),
                 Counterpart::Body(j) => Party::Body(j),
+                Counterpart::World => Party::World,
             };
             let record = |kind, impulse| ImpulseRecord {
                 kind,
@@ -935,7 +991,26 @@ impl Engine {
                 b,
                 impulse,
             };
-            if m.z[i] > 0.0 {
+            if let Some(limit) = c.limit {
+                // The row's first side is A's, or B's when A is the world
+                // (limit.rs); on it the row's impulse is the normal times
+                // z (a force along an along-row, a couple about a turning
+                // one).
+                let joint = &self.model.joints[limit.joint];
+                let on_a = match joint.a {
+                    Attachment::Body(_) => c.geom.normal * m.z[i],
+                    Attachment::World => -c.geom.normal * m.z[i],
+                };
+                if m.z[i] > 0.0 {
+                    ws.impulses.push(ImpulseRecord {
+                        kind: ImpulseKind::JointLimit,
+                        index: limit.joint,
+                        a: party(joint.a),
+                        b: party(joint.b),
+                        impulse: on_a,
+                    });
+                }
+            } else if m.z[i] > 0.0 {
                 ws.impulses
                     .push(record(ImpulseKind::Normal, c.geom.normal * m.z[i]));
             }

@@ -133,6 +133,13 @@ fn solve_lower(l: &[f64], nb: usize, x: &mut [f64]) {
     }
 }
 
+/// Grows `b`'s capacity to `a`'s (nothing when it has that already).
+fn grow_alike(a: &Vec<f64>, b: &mut Vec<f64>) {
+    if b.capacity() < a.capacity() {
+        b.reserve(a.capacity() - b.len());
+    }
+}
+
 /// Why the reduction failed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum MlcpError {
@@ -241,7 +248,11 @@ pub const HELD: f64 = 1e-6;
 /// And it never adds energy: with `nu' = nu_free + M^-1 G p`,
 /// `K(nu') - K(nu_free) = p^T G^T nu' - 1/2 p^T G^T M^-1 G p <= p^T G^T nu'`,
 /// and complementarity gives `p_b^T G_b^T nu' = 0`,
-/// `p_n^T G_n^T nu' = -a_n^T p_n <= 0`, `p_f^T G_f^T nu' = -p_f^T E s <= 0`.
+/// `p_n^T G_n^T nu' = -a_n^T p_n <= 0`, `p_f^T G_f^T nu' = -p_f^T E s <= 0`;
+/// but for the motors, whose rows give at most their work
+/// (`Mlcp::motor_work`). Their bounded pairs keep it solvable: the slack
+/// row `F h - p+ - p-` of the homogeneous problem is `-p+ - p- >= 0`, so
+/// its `x` is zero on the pairs and the argument holds as it is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Offsets {
     #[default]
@@ -253,7 +264,8 @@ pub enum Offsets {
 #[derive(Default)]
 pub struct Mlcp {
     /// Rows: joints (3 each), then normal rows, then (for the iterative
-    /// solver, see [`Mlcp::add_friction_rows`]) friction rows.
+    /// solver, see [`Mlcp::add_friction_rows`]) friction rows and the
+    /// motors' rows.
     pub rows: Vec<Row>,
     /// Joint rows.
     pub nb: usize,
@@ -263,12 +275,22 @@ pub struct Mlcp {
     pub nd: usize,
     /// Normal row `i` belongs to `contacts[lcp_contacts[i]]`.
     pub lcp_contacts: Vec<usize>,
+    /// Joint motors (`motor.rs`), always in the problem: motor `k` drives
+    /// joint `model.motors[k]`, whose first joint row is `motor_row[k]`
+    /// (its island's); `motor_speed[k]` is its target (held input),
+    /// `motor_cap[k]` its bound `F h` (N s or N m s).
+    pub nm: usize,
+    pub motor_row: Vec<usize>,
+    pub motor_speed: Vec<f64>,
+    pub motor_cap: Vec<f64>,
+    /// Each motor's axis in the world at the step's start (`motor::axis`).
+    pub motor_axis: Vec<Vector3<f64>>,
     /// Friction block `f` belongs to normal row `friction_of[f]`, with
     /// coefficient `mu[f]`.
     pub friction_of: Vec<usize>,
     pub mu: Vec<f64>,
-    /// The basis rows `[G_b, G_n, G_t1, G_t2]`: joint rows, normal rows,
-    /// then `t1, t2` of each friction block.
+    /// The basis rows `[G_b, G_n, G_t1, G_t2, G_m]`: joint rows, normal
+    /// rows, `t1, t2` of each friction block, then each motor's row.
     basis: Vec<Row>,
     /// `M^-1 B`, row by row ([`Row::weighted`]).
     weighted: Vec<Row>,
@@ -337,10 +359,10 @@ pub enum Assembly {
     Built,
 }
 
-/// Whether contact `c` gets friction rows: where `mu > 0`, or everywhere
-/// with the skip off.
+/// Whether contact `c` gets friction rows: where `mu > 0`, or on every
+/// touch with the skip off (a joint limit has none: it is no surface).
 pub fn has_friction_rows(c: &Contact, p: &Params) -> bool {
-    c.has_friction() || !p.skips.frictionless_rows
+    c.has_friction() || (!p.skips.frictionless_rows && c.limit.is_none())
 }
 
 /// The size of the pure LCP [`Mlcp::matrix_for`] would make for the
@@ -354,14 +376,35 @@ pub fn lcp_size_of(contacts: &[Contact], p: &Params) -> usize {
 }
 
 impl Mlcp {
-    /// Contact rows (normal and friction): `m`.
+    /// Rows of the pure LCP before the slacks: normal, friction and the
+    /// motors' pairs, `m = nc + nf n_d + 2 nm`.
     pub fn contact_rows(&self) -> usize {
-        self.nc + self.nf * self.nd
+        self.nc + self.nf * self.nd + 2 * self.nm
     }
 
-    /// Unknowns of the pure LCP: `n = nc + nf (n_d + 1)`.
+    /// Unknowns of the pure LCP, `[p_n; p_f; p_m; s; s_m]`:
+    /// `n = nc + nf (n_d + 1) + 3 nm`.
     pub fn lcp_size(&self) -> usize {
-        self.contact_rows() + self.nf
+        self.contact_rows() + self.nf + self.nm
+    }
+
+    /// Where motor `k`'s pair `(p+, p-)` starts in the LCP's unknowns.
+    pub fn motor_pair(&self, k: usize) -> usize {
+        self.nc + self.nf * self.nd + 2 * k
+    }
+
+    /// Motor `k`'s impulse `p+ - p-` in the last answer `z`.
+    pub fn motor_impulse(&self, k: usize) -> f64 {
+        let at = self.motor_pair(k);
+        self.z[at] - self.z[at + 1]
+    }
+
+    /// Sets the motors' targets from the held inputs (per joint; read for
+    /// the joints with a motor), before [`Mlcp::rhs`].
+    pub fn set_motor_speeds(&mut self, model: &Model, speeds: &[f64]) {
+        self.motor_speed.clear();
+        self.motor_speed
+            .extend(model.motors.iter().map(|&j| speeds[j]));
     }
 
     /// Forgets the matrix part: the positions (hence the rows) changed.
@@ -488,6 +531,23 @@ impl Mlcp {
         }
         self.nf = self.friction_of.len();
         self.nd = nd;
+        // The motors' rows, last in the basis (motor.rs).
+        self.motor_row.clear();
+        self.motor_cap.clear();
+        self.motor_axis.clear();
+        for &j in &model.motors {
+            let joint = &model.joints[j];
+            let (Some(row), Some(motor)) = (crate::motor::rate_row(joint, state), joint.motor)
+            else {
+                unreachable!("the scene gives motors to hinges and sliders only")
+            };
+            self.basis.push(row);
+            self.motor_axis
+                .push(crate::motor::axis(joint, state).unwrap_or_else(Vector3::zeros));
+            self.motor_row.push(model.joint_start[j]);
+            self.motor_cap.push(motor.max_effort * p.h);
+        }
+        self.nm = self.motor_row.len();
         self.offset.resize(self.rows.len(), 0.0);
         if matrix_free {
             self.add_friction_rows(contacts);
@@ -517,6 +577,13 @@ impl Mlcp {
 
         self.fill_coeffs();
         self.reduce_joints()?;
+        // `restrict` swaps each of these with its cut: the two must grow
+        // together, or which of them is the larger depends on how many
+        // cuts came before, and a second pass over the same run (its
+        // cuts in another parity) reallocated `y` (limits.toml, found by
+        // tests/tests/no_allocation.rs).
+        grow_alike(&self.w, &mut self.w_cut);
+        grow_alike(&self.y, &mut self.y_cut);
         if matrix_free {
             self.lcp_m.clear();
             self.mark_held_matrix_free();
@@ -558,6 +625,11 @@ impl Mlcp {
             let k = self.nc + 2 * f;
             self.coeffs
                 .extend(self.dirs.iter().map(|&(cs, sn)| (k, cs, k + 1, sn)));
+        }
+        // A motor's pair: its row and the row negated.
+        for k in 0..self.nm {
+            let b = self.nc + 2 * self.nf + k;
+            self.coeffs.extend([(b, 1.0, b, 0.0), (b, -1.0, b, 0.0)]);
         }
     }
 
@@ -683,6 +755,23 @@ impl Mlcp {
             }
             self.offset[nb + i] = a_n;
         }
+        // Motors (see form_matrix): `w+ = x' - v* + s_m`, `w- = -(x' - v*)
+        // + s_m`, `w_s = F h - p+ - p-`. The target is no position error:
+        // the relaxed problem keeps it (its bounded rows leave the
+        // homogeneous problem's `x = 0` on the pairs, see `Offsets`).
+        let (rows, nf) = (self.contact_rows(), self.nf);
+        let motor_rows = nb + self.nc + nf * self.nd;
+        for k in 0..self.nm {
+            let (at, v) = (self.motor_pair(k), self.motor_speed[k]);
+            self.lcp_q[at] -= v;
+            self.lcp_q[at + 1] += v;
+            self.lcp_q[rows + nf + k] = self.motor_cap[k];
+            // The iterative solver's row (matrix-free: after the friction
+            // rows) reads `x' - v*`.
+            if let Some(o) = self.offset.get_mut(motor_rows + k) {
+                *o = -v;
+            }
+        }
     }
 
     /// Forms the pure LCP's matrix from `W - Y^T Y` on the basis (in
@@ -753,6 +842,29 @@ impl Mlcp {
                 self.lcp_m[s * n + row] = -1.0;
             }
             self.lcp_m[s * n + i] = mu;
+        }
+        // Motors, a bounded row as a friction block of two directions
+        // (motor.rs): with `p = p+ - p-`, `p+-, s_m >= 0` and `w` the
+        // row's `x' - v*`,
+        //   w+  =  w + s_m >= 0  _|_  p+ >= 0
+        //   w-  = -w + s_m >= 0  _|_  p- >= 0
+        //   w_s = F h - p+ - p- >= 0  _|_  s_m >= 0.
+        // If s_m = 0: w+ = w and w- = -w are both >= 0, so w = 0 (x' =
+        // v*) with p+ + p- <= F h, |p| <= F h. If s_m > 0: w_s = 0, p+ +
+        // p- = F h; p+ and p- cannot both be positive (then w+ = w- = 0
+        // and s_m = (w+ + w-) / 2 = 0), so either p = F h with w = -s_m
+        // < 0 (x' < v*: full push forward) or p = -F h with w = s_m > 0.
+        // That is the box of motor.rs, and `s_m = |x' - v*|` when the
+        // bound holds, as friction's slack is the slip. The pair's rows
+        // are +- the motor's basis row (fill_coeffs); `E` enters their
+        // slack column, `-E^T` the slack row, whose constant `F h` is in
+        // `q` (form_rhs).
+        for k in 0..self.nm {
+            let (at, s) = (self.nc + self.nf * self.nd + 2 * k, m + self.nf + k);
+            for row in [at, at + 1] {
+                self.lcp_m[row * n + s] = 1.0;
+                self.lcp_m[s * n + row] = -1.0;
+            }
         }
     }
 
@@ -877,7 +989,20 @@ impl Mlcp {
             .filter(|&k| self.offset[k] < 0.0)
             .map(|k| row(k, p.contact_compliance))
             .sum();
-        joints + contacts
+        joints + contacts + self.motor_work()
+    }
+
+    /// The most work the motors can do in a step (J): a motor's row gives
+    /// `p x'` with `|p| <= F h`, and the box makes `p x' <= F h |v*|`
+    /// (interior: `x' = v*`; at `p = F h`, `x' <= v*`; at `-F h`, `x' >=
+    /// v*`). With `K(nu') - K(nu_free) <= p^T G^T nu'` (see `Offsets`),
+    /// this bounds what they add, in every formulation.
+    pub fn motor_work(&self) -> f64 {
+        self.motor_cap
+            .iter()
+            .zip(&self.motor_speed)
+            .map(|(cap, v)| cap * v.abs())
+            .sum()
     }
 
     /// [`Mlcp::kinetic_change`] from the iterative solver's impulses
@@ -939,6 +1064,9 @@ impl Mlcp {
                 self.kept.push(nc + 2 * f + 1);
             }
         }
+        // Every motor stays, last.
+        let motors = nc + 2 * self.friction_of.len();
+        self.kept.extend(motors..motors + self.nm);
         // Basis-level arrays: joint part as it is, contact part selected.
         let select = |v: &mut Vec<Row>, kept: &[usize]| {
             for (t, &k) in kept.iter().enumerate() {
@@ -1018,6 +1146,10 @@ impl Mlcp {
                 self.rows.push(Row::contact(c, c.t1 * cs + c.t2 * sn));
             }
         }
+        // The motors' rows: the basis's last (their offsets `-v*` are
+        // form_rhs's).
+        let motors = self.basis.len() - self.nm;
+        self.rows.extend_from_slice(&self.basis[motors..]);
         self.offset.resize(self.rows.len(), 0.0);
         self.cfm.resize(self.rows.len(), 0.0);
     }

@@ -78,6 +78,28 @@ pub struct Joint {
     pub slide: Option<Vector3<f64>>,
     /// Whether the two bodies' shapes touch (see `Model::excluded`).
     pub collide: bool,
+    /// A hinge's or slider's coordinate limits (`limit.rs`).
+    pub limits: Option<Limits>,
+    /// A hinge's or slider's velocity motor (`motor.rs`).
+    pub motor: Option<Motor>,
+}
+
+/// A joint motor: the coordinate's rate driven to `speed` (the scene's;
+/// a controller's `Engine::set_motor_speed` holds another) by an effort of
+/// at most `max_effort` (N m or N).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Motor {
+    pub speed: f64,
+    pub max_effort: f64,
+}
+
+/// A coordinate's limits (rad or m, `joint::coordinate`'s units) and the
+/// restitution of a hit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    pub lower: f64,
+    pub upper: f64,
+    pub restitution: f64,
 }
 
 /// What a joint leaves of the relative rotation.
@@ -312,6 +334,9 @@ pub struct Model {
     /// Per body, whether it is a side of some joint (such a body never
     /// sleeps, and the projection out of deep penetration leaves it).
     pub jointed: Vec<bool>,
+    /// The joints with a motor, ascending: motor `k` is joint
+    /// `motors[k]`'s (its row follows the joint block's, `motor.rs`).
+    pub motors: Vec<usize>,
     pub params: Params,
     pub initial: Vec<InitialBody>,
 }
@@ -432,6 +457,15 @@ impl Model {
                     turning,
                     slide,
                     collide: j.collide,
+                    limits: j.range.map(|[lower, upper]| Limits {
+                        lower,
+                        upper,
+                        restitution: j.limit_restitution.unwrap_or(0.0),
+                    }),
+                    motor: j.motor.map(|m| Motor {
+                        speed: m.speed,
+                        max_effort: m.max_effort,
+                    }),
                 }
             })
             .collect();
@@ -454,6 +488,9 @@ impl Model {
                 }
             }
         }
+        let joints_with_motors: Vec<usize> = (0..joints.len())
+            .filter(|&j| joints[j].motor.is_some())
+            .collect();
         let mut joint_start = vec![0];
         for j in &joints {
             joint_start.push(joint_start[joint_start.len() - 1] + j.rows());
@@ -468,6 +505,7 @@ impl Model {
             weld,
             excluded,
             jointed,
+            motors: joints_with_motors,
             params: Params {
                 h: s.dt,
                 gravity: v3(s.gravity),
@@ -517,12 +555,19 @@ impl Model {
             // Pairs (a, a+1 .. n-1) for a = 0, 1, ...: a (2n - a - 1) / 2 of
             // them come before row a.
             Counterpart::Body(j) => n * np + a * (2 * n - a - 1) / 2 + (j - a - 1),
+            Counterpart::World => {
+                unreachable!("no shape touches the world itself: a limit's id is limit_id's")
+            }
         }
     }
 
     /// The bodies of contact `id`: the inverse of [`Model::contact_id`].
     pub fn contact_bodies(&self, id: usize) -> (usize, Counterpart) {
         let (n, np) = (self.bodies.len(), self.planes.len());
+        let shapes = self.potential_contacts();
+        if id >= shapes {
+            return self.limit_bodies((id - shapes) / 2);
+        }
         if id < n * np {
             return (id / np, Counterpart::Plane(id % np));
         }
@@ -546,6 +591,27 @@ impl Model {
     /// (`Model::excluded`).
     pub fn may_touch(&self, i: usize, j: usize) -> bool {
         self.weld[i] != self.weld[j] && self.excluded.binary_search(&(i.min(j), i.max(j))).is_err()
+    }
+
+    /// The contact id of joint `joint`'s lower (`upper = false`) or upper
+    /// limit: past every potential contact of the shapes, so that the
+    /// contact list, limits last, ascends by id.
+    pub fn limit_id(&self, joint: usize, upper: bool) -> usize {
+        self.potential_contacts() + 2 * joint + usize::from(upper)
+    }
+
+    /// The sides of joint `j` as a contact's: a body first (B when A is
+    /// the world), then the other body or the world.
+    pub fn limit_bodies(&self, j: usize) -> (usize, Counterpart) {
+        let joint = &self.joints[j];
+        match (joint.a, joint.b) {
+            (Attachment::Body(a), Attachment::Body(b)) => (a, Counterpart::Body(b)),
+            (Attachment::Body(i), Attachment::World) | (Attachment::World, Attachment::Body(i)) => {
+                (i, Counterpart::World)
+            }
+            // The scene refuses a joint of the world to itself.
+            (Attachment::World, Attachment::World) => (0, Counterpart::World),
+        }
     }
 
     /// Number of potential contacts: every sphere against every plane and,

@@ -95,8 +95,11 @@ pub fn deep_penetration(
     // A body moves here unless a joint holds it or it has no inverse
     // mass (asleep).
     let moves = |i: usize| !jointed[i] && minv[i].inv_m > 0.0;
-    let movable =
-        |c: &Contact| moves(c.geom.a) || matches!(c.geom.b, Counterpart::Body(j) if moves(j));
+    // A joint limit's bodies are on its joint, and its gap is no distance.
+    let movable = |c: &Contact| {
+        c.limit.is_none()
+            && (moves(c.geom.a) || matches!(c.geom.b, Counterpart::Body(j) if moves(j)))
+    };
     let deep = contacts
         .iter()
         .filter(|c| c.geom.gap < -PENETRATION_SLOP && movable(c))

@@ -36,6 +36,14 @@ pub fn select(contacts: &mut [Contact], state: &State, nu_free: &[f64], p: &Para
         state.bodies[i].v.norm().max(free.norm())
     };
     for c in contacts.iter_mut() {
+        if c.limit.is_some() {
+            // A limit's gap is a coordinate's (rad or m): its own rate
+            // bounds it, at the start (`v_n`) and free.
+            let free = Row::contact(c, c.geom.normal).velocity(nu_free);
+            c.in_lcp =
+                p.full || c.geom.gap <= p.h * (-c.v_n).max(-free).max(0.0) + p.contact_margin;
+            continue;
+        }
         c.in_lcp = p.full || {
             let mut s = speed(c.geom.a);
             if let Counterpart::Body(j) = c.geom.b {

@@ -150,7 +150,8 @@ pub struct StepReport {
     pub energy_refused: bool,
     /// The kinetic energy over the free motion's that the step's answer
     /// was allowed by the energy check (J; `fallback::Solved::allowance`):
-    /// what the stabilisation may have given. Zero for a fallback;
+    /// what the stabilisation and the motors may have given. For a
+    /// fallback the motors' work alone (`Mlcp::motor_work`);
     /// infinite with `Params::fallback` off (not checked).
     pub energy_allowance: f64,
     /// Contacts that started the step deeper than `project::PENETRATION_SLOP`

@@ -5,6 +5,7 @@
 use super::applied::InvMass;
 use super::collision::Counterpart;
 use super::contact::Contact;
+use super::state::State;
 use nalgebra::Vector3;
 
 /// The part of a row on one body.
@@ -91,13 +92,17 @@ impl Row {
         }
     }
 
-    /// A contact row along `dir` (the normal or a friction direction).
+    /// A contact row along `dir` (the normal or a friction direction); a
+    /// hinge limit's is the turning row about `dir` (limit.rs).
     pub fn contact(c: &Contact, dir: Vector3<f64>) -> Row {
         let g = &c.geom;
         let b = match g.b {
-            Counterpart::Plane(_) => None,
+            Counterpart::Plane(_) | Counterpart::World => None,
             Counterpart::Body(j) => Some((j, g.r_b)),
         };
+        if c.limit.is_some_and(|l| l.angular) {
+            return Row::turning(dir, Some(g.a), b.map(|(j, _)| j));
+        }
         Row::along(dir, Some((g.a, g.r_a)), b)
     }
 
@@ -116,6 +121,18 @@ impl Row {
             a: mix(a.a, b.a),
             b: mix(a.b, b.b),
         }
+    }
+
+    /// The row's velocity at the bodies' velocities in `state`.
+    pub fn state_velocity(&self, state: &State) -> f64 {
+        [self.a, self.b]
+            .into_iter()
+            .flatten()
+            .map(|j| {
+                let b = &state.bodies[j.body];
+                j.lin.dot(&b.v) + j.ang.dot(&b.w)
+            })
+            .sum()
     }
 
     /// The row's velocity `G_k^T nu`.

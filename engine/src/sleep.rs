@@ -67,7 +67,7 @@ pub fn unlisted(state: &State, a: usize, b: Counterpart) -> bool {
     asleep(state, a)
         && match b {
             Counterpart::Body(j) => asleep(state, j),
-            Counterpart::Plane(_) => true,
+            Counterpart::Plane(_) | Counterpart::World => true,
         }
 }
 

@@ -11,10 +11,11 @@
 //! what else is in the scene (`tests/tests/islands.rs`: the same bits with
 //! and without a far-away second pile).
 //!
-//! Each island's block mirrors the whole LCP's layout, `[p_n; p_f; s]`:
-//! its normal rows in order, then its friction blocks' rows, then their
-//! slacks, so that Lemke's guess and its slack rule read it as they read
-//! the whole.
+//! Each island's block mirrors the whole LCP's layout, `[p_n; p_f; p_m;
+//! s; s_m]`: its normal rows in order, then its friction blocks' rows, its
+//! motors' pairs (a motor is its joint's island's), then the friction
+//! slacks and the motors', so that Lemke's guess and its slack rule read
+//! it as they read the whole.
 //!
 //! Two uses: [`Split::lemke`] cuts the blocks out of the whole LCP's
 //! matrix where Lemke solves every island (`solver = "lemke"`, or `auto`
@@ -61,8 +62,10 @@ pub struct Split {
     /// Island `g`'s LCP unknowns are `unknowns[start[g]..start[g + 1]]`.
     unknowns: Vec<u32>,
     start: Vec<u32>,
-    /// Island `g`'s normal rows and friction blocks (their counts).
-    shape: Vec<(u32, u32)>,
+    /// Island `g`'s normal rows, friction blocks and motors (counts).
+    shape: Vec<(u32, u32, u32)>,
+    /// Each motor's island.
+    motor_island: Vec<u32>,
     m: Vec<f64>,
     q: Vec<f64>,
     z: Vec<f64>,
@@ -85,6 +88,9 @@ impl Split {
     pub fn index(&mut self, m: &Mlcp, groups: &Groups) {
         let (nb, nc, nd) = (m.nb, m.nc, m.nd);
         let rows = m.contact_rows();
+        self.motor_island.clear();
+        self.motor_island
+            .extend(m.motor_row.iter().map(|&r| groups.island_of_row(r) as u32));
         self.block_of.clear();
         self.block_of.resize(nc, u32::MAX);
         for (f, &i) in m.friction_of.iter().enumerate() {
@@ -122,10 +128,17 @@ impl Split {
                 self.unknowns.extend((base..base + nd).map(|u| u as u32));
                 nfi += 1;
             }
+            let motors = (0..m.nm).filter(|&k| self.motor_island[k] == g as u32);
+            for k in motors.clone() {
+                let at = m.motor_pair(k) as u32;
+                self.unknowns.extend([at, at + 1]);
+            }
             self.unknowns
                 .extend(blocks.map(|f| (rows + f as usize) as u32));
+            self.unknowns
+                .extend(motors.clone().map(|k| (rows + m.nf + k) as u32));
             self.start.push(self.unknowns.len() as u32);
-            self.shape.push((nci as u32, nfi));
+            self.shape.push((nci as u32, nfi, motors.count() as u32));
         }
     }
 
@@ -136,9 +149,13 @@ impl Split {
         self.rest.extend(0..islands as u32);
     }
 
-    /// Islands with LCP unknowns (a jointed pair in flight has none).
+    /// Islands with LCP unknowns (a jointed pair in flight has none, but
+    /// for a motor).
     pub fn islands(&self) -> usize {
-        self.shape.iter().filter(|&&(nc, _)| nc > 0).count()
+        self.shape
+            .iter()
+            .filter(|&&(nc, _, nm)| nc + nm > 0)
+            .count()
     }
 
     /// Solves `m`'s LCP island by island into `m.z` (sized already): each
@@ -159,7 +176,7 @@ impl Split {
                 m: &m.lcp_m,
                 q: &m.lcp_q,
             };
-            let layout = (m.nc, m.nf, m.nd);
+            let layout = (m.nc, m.nf, m.nd, m.nm);
             return guess_or_solve(lemke, &lcp, guess, layout, &mut self.slacks, &mut m.z);
         }
         let mut total = SolveInfo {
@@ -217,7 +234,8 @@ impl Split {
             self.guess.extend(u.iter().map(|&a| guess[a as usize]));
             &self.guess[..]
         });
-        let layout = (self.shape[g].0 as usize, self.shape[g].1 as usize, nd);
+        let (nc, nf, nm) = self.shape[g];
+        let layout = (nc as usize, nf as usize, nd, nm as usize);
         guess_or_solve(lemke, &lcp, guess, layout, &mut self.slacks, &mut self.z)
     }
 
@@ -254,6 +272,7 @@ impl Split {
                 }
                 continue;
             }
+            // Without joints, so without motors.
             let (nci, nfi) = (self.shape[g].0 as usize, self.shape[g].1 as usize);
             let direct = nci + nfi * nd;
             self.weighted.clear();
@@ -308,20 +327,22 @@ impl Split {
 
 /// Lemke on `lcp` into `z`: from the support `guess` where one is given
 /// and its answer verifies ([`Lemke::solve_guess`]), else by the ladder.
-/// `(nc, nf, nd)` is the LCP's layout `[p_n; p_f; s]` (normal rows,
-/// friction blocks, directions), whose slacks the guess fills; `slacks`
-/// is scratch.
+/// `(nc, nf, nd, nm)` is the LCP's layout `[p_n; p_f; p_m; s; s_m]`
+/// (normal rows, friction blocks, directions, motors), whose slacks the
+/// guess fills (a motor's over its pair); `slacks` is scratch.
 fn guess_or_solve(
     lemke: &mut Lemke,
     lcp: &Lcp,
     guess: Option<&[bool]>,
-    (nc, nf, nd): (usize, usize, usize),
+    (nc, nf, nd, nm): (usize, usize, usize, usize),
     slacks: &mut Vec<(usize, usize, usize)>,
     z: &mut [f64],
 ) -> Result<SolveInfo, LemkeError> {
     if let Some(guess) = guess {
+        let rows = nc + nf * nd + 2 * nm;
         slacks.clear();
-        slacks.extend((0..nf).map(|f| (nc + nf * nd + f, nc + f * nd, nd)));
+        slacks.extend((0..nf).map(|f| (rows + f, nc + f * nd, nd)));
+        slacks.extend((0..nm).map(|k| (rows + nf + k, nc + nf * nd + 2 * k, 2)));
         if let Some(info) = lemke.solve_guess(lcp, guess, slacks, z) {
             return Ok(info);
         }

@@ -24,7 +24,8 @@ pub struct State {
     /// snapshot is complete and a restored PGS run repeats its bits: the
     /// last step's impulses of the contacts in its final LCP, sorted by
     /// contact id (a contact not listed had none), and joint impulses (a
-    /// joint's rows: `Model::joint_start`). Sparse: a list of every
+    /// joint's rows: `Model::joint_start`; then each motor's, in
+    /// `Model::motors`' order). Sparse: a list of every
     /// potential contact held N P + N (N - 1) / 2 entries, 16 MB per
     /// state at 1,000 spheres and 1.6 GB at 10,000 (issue 14, point 5).
     pub warm_contacts: Vec<WarmContact>,
@@ -88,7 +89,7 @@ impl State {
                 })
                 .collect(),
             warm_contacts: Vec::new(),
-            warm_joint: vec![0.0; model.joint_start[model.joints.len()]],
+            warm_joint: vec![0.0; model.joint_start[model.joints.len()] + model.motors.len()],
             warm_lcp: Vec::new(),
             warm_active: Vec::new(),
             rest: vec![0; model.bodies.len()],

@@ -124,6 +124,8 @@ impl Writers {
             let (kind, name) = match r.kind {
                 ImpulseKind::Joint => ("joint", model.joints[r.index].name.clone()),
                 ImpulseKind::JointTorque => ("joint_torque", model.joints[r.index].name.clone()),
+                ImpulseKind::JointLimit => ("joint_limit", model.joints[r.index].name.clone()),
+                ImpulseKind::JointMotor => ("joint_motor", model.joints[r.index].name.clone()),
                 ImpulseKind::Normal => ("normal", contact_name(model, r.a, r.b)),
                 ImpulseKind::Friction => ("friction", contact_name(model, r.a, r.b)),
             };

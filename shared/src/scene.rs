@@ -402,6 +402,33 @@ pub struct JointDesc {
     /// nothing: the planes are not the world's body.
     #[serde(default = "default_true")]
     pub collide: bool,
+    /// `revolute` and `prismatic` only: the coordinate's limits `[lower,
+    /// upper]` (rad for a hinge, within [-pi, pi]; m for a slider), with
+    /// `lower < upper`; the coordinate is 0 at t = 0 (MuJoCo's `range`,
+    /// URDF's `<limit lower upper>`). Held by unilateral rows, each with
+    /// its own stabilisation, as contacts are.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub range: Option<[f64; 2]>,
+    /// Newton restitution of a limit hit, in [0, 1] (0: the coordinate
+    /// stops at the limit); only with `range`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limit_restitution: Option<f64>,
+    /// `revolute` and `prismatic` only: a velocity motor (Rapier's and
+    /// ODE's joint motor, MuJoCo's velocity actuator with a force range).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motor: Option<MotorDesc>,
+}
+
+/// A joint motor: drives the coordinate's rate to `speed` with an effort of
+/// at most `max_effort`, one bounded row (`|p| <= max_effort h`).
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MotorDesc {
+    /// The target rate (rad/s for a hinge, m/s for a slider); a
+    /// controller may change it.
+    pub speed: f64,
+    /// The largest torque (N m) or force (N) the motor gives, > 0.
+    pub max_effort: f64,
 }
 
 impl JointKind {
@@ -662,6 +689,62 @@ impl Scene {
                     f("torque"),
                     "a prismatic joint's effort is a force: give `force`".into(),
                 ));
+            }
+            match (j.kind, j.range) {
+                (JointKind::Revolute | JointKind::Prismatic, Some([lo, hi])) => {
+                    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                        return Err(err(
+                            f("range"),
+                            format!("= [{lo}, {hi}]: needs finite bounds with lower < upper"),
+                        ));
+                    }
+                    let pi = std::f64::consts::PI;
+                    if j.kind == JointKind::Revolute && (lo < -pi || hi > pi) {
+                        return Err(err(
+                            f("range"),
+                            format!(
+                                "= [{lo}, {hi}]: a hinge's limits are angles within [-pi, pi] (rad)"
+                            ),
+                        ));
+                    }
+                }
+                (kind, Some(_)) => {
+                    return Err(err(
+                        f("range"),
+                        format!(
+                            "only a revolute or prismatic joint has a range (this one is {})",
+                            kind.as_str()
+                        ),
+                    ))
+                }
+                (_, None) => {}
+            }
+            if let Some(motor) = j.motor {
+                if !matches!(j.kind, JointKind::Revolute | JointKind::Prismatic) {
+                    return Err(err(
+                        f("motor"),
+                        format!(
+                            "only a revolute or prismatic joint has a motor (this one is {})",
+                            j.kind.as_str()
+                        ),
+                    ));
+                }
+                if !motor.speed.is_finite() {
+                    return Err(err(
+                        f("motor.speed"),
+                        format!("= {}: must be finite", motor.speed),
+                    ));
+                }
+                positive(motor.max_effort).map_err(|m| err(f("motor.max_effort"), m))?;
+            }
+            if let Some(e) = j.limit_restitution {
+                if j.range.is_none() {
+                    return Err(err(
+                        f("limit_restitution"),
+                        "a limit's restitution needs the joint's `range`".into(),
+                    ));
+                }
+                unit_interval(e).map_err(|m| err(f("limit_restitution"), m))?;
             }
             match (j.kind, j.axis) {
                 (kind @ (JointKind::Revolute | JointKind::Prismatic), None) => {

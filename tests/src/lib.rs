@@ -68,3 +68,139 @@ pub fn shipped_scene(name: &str) -> String {
         .join(name);
     std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
+
+/// The momenta of a run of spheres in zero gravity, watched step by step
+/// against what a joint's drift explains: a joint's anchor rows put `+p`
+/// and `-p` on its two bodies at their own anchors, `psi` apart, a moment
+/// `psi x p`, so over the run `|L - L_0| <= sum |psi| |p|` (the drift at
+/// each step's start, the step's anchor impulse); every other impulse
+/// of a joint, limit or motor is internal and moves neither momentum.
+pub struct Momenta {
+    p0: nalgebra::Vector3<f64>,
+    l0: nalgebra::Vector3<f64>,
+    psi: f64,
+    /// `sum |psi| |p|` so far (N m s).
+    pub moments: f64,
+    /// The largest change of the linear momentum (N s), and of the
+    /// angular one beyond `moments` (N m s).
+    pub dp: f64,
+    pub dl: f64,
+}
+
+impl Momenta {
+    /// Linear and angular momentum (about the origin) of `e`'s bodies;
+    /// spheres, whose inertia is the same in every frame.
+    pub fn of(e: &Engine) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>) {
+        let (mut p, mut l) = (nalgebra::Vector3::zeros(), nalgebra::Vector3::zeros());
+        for (b, st) in e.model().bodies.iter().zip(&e.state().bodies) {
+            p += st.v * b.mass;
+            l += st.x.cross(&(st.v * b.mass)) + b.inertia * st.w;
+        }
+        (p, l)
+    }
+
+    /// Starts watching from `e`'s state (its drift: zero).
+    pub fn start(e: &Engine) -> Momenta {
+        let (p0, l0) = Momenta::of(e);
+        Momenta {
+            p0,
+            l0,
+            psi: 0.0,
+            moments: 0.0,
+            dp: 0.0,
+            dl: 0.0,
+        }
+    }
+
+    /// After a step with report `r` (the drift it ends with starts the
+    /// next); the scene's first joint's anchor impulse.
+    pub fn after_step(&mut self, e: &Engine, r: &StepReport) {
+        let (p, l) = Momenta::of(e);
+        let anchor = e
+            .impulses()
+            .iter()
+            .find(|i| i.kind == cosim_server::engine::ImpulseKind::Joint)
+            .map_or(0.0, |i| i.impulse.norm());
+        self.moments += self.psi * anchor;
+        self.psi = r.max_joint_error;
+        self.dp = self.dp.max((p - self.p0).norm());
+        self.dl = self.dl.max((l - self.l0).norm() - self.moments);
+    }
+}
+
+/// A car: a 1 kg sphere (r = 0.05 m) at (0, 0, 1) on a level rail along
+/// x from the world (prismatic joint `rail`), under gravity, with `extra`
+/// lines added to the joint (a force, a range, a motor).
+pub fn rail_car(h: f64, steps: u64, extra: &str) -> Engine {
+    let mut s = sim(h, steps, [0.0, 0.0, -G]);
+    s += &sphere("car", 0.05, 1.0, [0.0, 0.0, 1.0], [0.0; 3], 0.0, 0.0);
+    s += &joint_of(
+        "prismatic",
+        "rail",
+        "world",
+        "car",
+        [0.0, 0.0, 1.0],
+        Some([1.0, 0.0, 0.0]),
+    );
+    s += extra;
+    engine(&s)
+}
+
+/// Two free spheres in zero gravity on a hinge about z at A's centre (the
+/// origin; `collide = false`): A of 2 kg, B of 1 kg 0.2 m along x,
+/// turning about the hinge at `spin` rad/s (its centre moving at `0.2
+/// spin` along y), with `extra` lines added to the joint.
+pub fn elbow_pair(h: f64, steps: u64, spin: f64, extra: &str) -> Engine {
+    let mut s = sim(h, steps, [0.0; 3]);
+    s += &sphere("a", 0.05, 2.0, [0.0; 3], [0.0; 3], 0.0, 0.0);
+    s += &sphere(
+        "b",
+        0.05,
+        1.0,
+        [0.2, 0.0, 0.0],
+        [0.0, 0.2 * spin, 0.0],
+        0.0,
+        0.0,
+    );
+    s += &format!("angular_velocity = [0.0, 0.0, {spin:e}]\n");
+    s += &joint_of(
+        "revolute",
+        "elbow",
+        "a",
+        "b",
+        [0.0; 3],
+        Some([0.0, 0.0, 1.0]),
+    );
+    s += "collide = false\n";
+    s += extra;
+    engine(&s)
+}
+
+/// A pendulum hinged to the world about y at (0, 0, 1), its bob (1 kg, r
+/// = 0.05 m) 0.5 m along x, level at the start (a positive angle swings
+/// it down) and turning at `w0` rad/s, with `extra` lines added to the
+/// joint (`pivot`).
+pub fn level_pendulum(h: f64, steps: u64, gravity: [f64; 3], w0: f64, extra: &str) -> Engine {
+    let l = 0.5;
+    let mut s = sim(h, steps, gravity);
+    s += &sphere(
+        "bob",
+        0.05,
+        1.0,
+        [l, 0.0, 1.0],
+        [0.0, 0.0, -w0 * l],
+        0.0,
+        0.0,
+    );
+    s += &format!("angular_velocity = [0.0, {w0:e}, 0.0]\n");
+    s += &joint_of(
+        "revolute",
+        "pivot",
+        "world",
+        "bob",
+        [0.0, 0.0, 1.0],
+        Some([0.0, 1.0, 0.0]),
+    );
+    s += extra;
+    engine(&s)
+}

@@ -9,7 +9,7 @@ use cosim_server::engine::{Engine, LadderCounts, Model, Turning};
 use cosim_shared::{Scene, SolverChoice};
 use cosim_tests::shipped_scene;
 
-const SHIPPED: [&str; 8] = [
+const SHIPPED: [&str; 9] = [
     "reference.toml",
     "friction.toml",
     "frictionless.toml",
@@ -18,6 +18,7 @@ const SHIPPED: [&str; 8] = [
     "joints.toml",
     "restitution.toml",
     "slider.toml",
+    "limits.toml",
 ];
 
 /// Steps `steps` times; panics on a failed step or, with Lemke asked for,
@@ -155,6 +156,7 @@ fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
     assert_ne!(robust::scene(7), robust::scene(8));
     let (mut corners, mut joints, mut overlapping) = (0, 0, 0);
     let (mut hinges, mut welds, mut sliders, mut apart) = (0, 0, 0, 0);
+    let (mut limited, mut bouncing, mut motors) = (0, 0, 0);
     for seed in 1..=200 {
         let text = robust::scene(seed);
         let scene = Scene::parse(&text, "<robust>").unwrap_or_else(|e| panic!("{e}\n{text}"));
@@ -169,6 +171,9 @@ fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
                 (Turning::Locked { .. }, None) => welds += 1,
             }
             apart += usize::from(!j.collide);
+            limited += usize::from(j.limits.is_some());
+            bouncing += usize::from(j.limits.is_some_and(|l| l.restitution > 0.0));
+            motors += usize::from(j.motor.is_some());
         }
         let engine = Engine::new(model.clone());
         let (mut scratch, mut geoms) = Default::default();
@@ -189,6 +194,12 @@ fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
     assert!(
         hinges >= 25 && welds >= 25 && sliders >= 25 && apart >= 25,
         "{hinges} hinges, {welds} welds, {sliders} sliders, {apart} apart"
+    );
+    // Half the hinges and sliders limited, a third of those bouncing; a
+    // third with a motor.
+    assert!(
+        limited >= 25 && bouncing >= 8 && motors >= 15,
+        "{limited} limited, {bouncing} bouncing, {motors} motors"
     );
 }
 

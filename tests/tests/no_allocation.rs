@@ -3,7 +3,7 @@
 //! counts the allocations made while stepping, per thread: the tests run
 //! in parallel, and one's warm-up must not count in another's step.
 
-use cosim_server::engine::{Engine, Model};
+use cosim_server::engine::{Engine, ImpulseKind, Model};
 use cosim_server::scenes;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -50,7 +50,8 @@ static GLOBAL: Counting = Counting;
 
 /// Runs `model` for `steps` steps (the warm-up: one pass sees the largest
 /// problems), then the same steps again from the initial state; the
-/// allocations of the second pass, and the active contacts of the first.
+/// allocations of the second pass, and the active contacts and joint
+/// limits (impulse records) of the first.
 fn second_pass_allocations(model: Model, steps: usize) -> (usize, usize) {
     let mut engine = Engine::new(model);
     let initial = engine.state().clone();
@@ -58,7 +59,11 @@ fn second_pass_allocations(model: Model, steps: usize) -> (usize, usize) {
     for _ in 0..steps {
         let r = engine.step();
         assert!(r.ok());
-        contacts += r.active_contacts;
+        contacts += engine
+            .impulses()
+            .iter()
+            .filter(|i| matches!(i.kind, ImpulseKind::Normal | ImpulseKind::JointLimit))
+            .count();
     }
     engine.set_state(initial);
     let before = allocations();
@@ -83,8 +88,8 @@ fn stepping_allocates_nothing_after_warm_up() {
 }
 
 /// The same with a hinge and a fixed joint (their rotation rows) and a
-/// contact between a jointed body and a free one: the shipped hinges
-/// and slider scenes.
+/// contact between a jointed body and a free one: the shipped hinges,
+/// slider and limits scenes (the last: limits hit and held).
 #[test]
 fn hinges_sliders_and_fixed_joints_allocate_nothing_after_warm_up() {
     // And sliders: slider.toml's rail and pendulum run into a ball.
@@ -93,13 +98,15 @@ fn hinges_sliders_and_fixed_joints_allocate_nothing_after_warm_up() {
         ("hinges.toml", cosim_shared::SolverChoice::Pgs),
         ("slider.toml", cosim_shared::SolverChoice::Lemke),
         ("slider.toml", cosim_shared::SolverChoice::Pgs),
+        ("limits.toml", cosim_shared::SolverChoice::Lemke),
+        ("limits.toml", cosim_shared::SolverChoice::Pgs),
     ] {
         let text = cosim_tests::shipped_scene(name);
         let scene = cosim_shared::Scene::parse(&text, name).expect("shipped scene");
         let mut model = Model::from_scene(&scene);
         model.params.solver = solver;
         let (made, contacts) = second_pass_allocations(model, 3000);
-        assert!(contacts > 0, "{name}: the arm never touched anything");
+        assert!(contacts > 0, "{name}: nothing touched, no limit held");
         assert_eq!(
             made,
             0,

@@ -86,15 +86,7 @@ fn a_slider_on_a_spinning_body_keeps_the_momenta_and_slides_out() {
         Some([1.0, 0.0, 0.0]),
     );
     let mut e = engine(&s);
-    let momenta = |e: &cosim_server::engine::Engine| {
-        let (mut p, mut l) = (Vector3::zeros(), Vector3::zeros());
-        for (b, st) in e.model().bodies.iter().zip(&e.state().bodies) {
-            p += st.v * b.mass;
-            // A sphere's inertia is isotropic: the same in every frame.
-            l += st.x.cross(&(st.v * b.mass)) + b.inertia * st.w;
-        }
-        (p, l)
-    };
+    let momenta = Momenta::of;
     let (p0, l0) = momenta(&e);
     let joint = e.model().joints[0].clone();
     let (mut dp, mut dl, mut off_axis, mut turned) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);

@@ -21,6 +21,9 @@ pub use sphere_sphere::sphere_sphere;
 pub enum Counterpart {
     Plane(usize),
     Body(usize),
+    /// The fixed world: a joint limit's other side when the joint holds a
+    /// body to the world (`joint::limits`).
+    World,
 }
 
 /// The geometry of one potential contact between body `a` and `b`.

@@ -84,7 +84,8 @@ impl Default for PgsParams {
 
 /// The step's problem, as the mLCP stage built it.
 pub struct PgsProblem<'a> {
-    /// Rows: `nb` joint rows, `nc` normal rows, then `nd` per friction block.
+    /// Rows: `nb` joint rows, `nc` normal rows, `nd` per friction block,
+    /// then one per motor.
     pub rows: &'a [Row],
     pub offset: &'a [f64],
     /// Each row's constraint-force mixing (compliance, `Mlcp::cfm`): the
@@ -112,6 +113,17 @@ pub struct PgsProblem<'a> {
     /// The islands to iterate (the others are solved already: their
     /// impulses are part of the warm start and stay).
     pub iterate: &'a [u32],
+    /// Per motor, its joint's first row (its island's) and its bound
+    /// `F h`: the box its impulse is projected on (motor.rs).
+    pub motor_row: &'a [usize],
+    pub motor_cap: &'a [f64],
+}
+
+impl PgsProblem<'_> {
+    /// Where the motors' rows start in `rows`.
+    fn motor_rows(&self) -> usize {
+        self.nb + self.nc + self.friction_of.len() * self.nd
+    }
 }
 
 /// How the iteration ended.
@@ -238,7 +250,7 @@ pub struct Pgs {
     /// `weighted`'s) and the inverse of their 2 x 2 Delassus block.
     tangent: Vec<Tangent>,
     /// The iterate: joint and normal impulses, then each friction block's
-    /// 2-D tangential impulse `(p_t1, p_t2)`. The `n_d` direction impulses
+    /// 2-D tangential impulse `(p_t1, p_t2)`, then each motor's impulse. The `n_d` direction impulses
     /// are written from it at the end (and for the residual): a block's
     /// update then reads and writes two numbers, not `n_d`.
     x: Vec<f64>,
@@ -254,6 +266,11 @@ pub struct Pgs {
     coord_start: Vec<u32>,
     /// Scratch of the residual: a block's direction impulses.
     dirs: Vec<f64>,
+    /// Per motor, its row's Delassus diagonal; per island, its motors:
+    /// `motors[motor_start[g]..motor_start[g + 1]]`.
+    motor_diag: Vec<f64>,
+    motors: Vec<u32>,
+    motor_start: Vec<u32>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -384,7 +401,7 @@ impl Pgs {
             // whose few sweeps on a pile it would slow by a tenth).
             if params.stop == Stop::Distance
                 && it % CHECK_EVERY == 0
-                && self.residual_of(p, p.groups.rows_of(g), nu).relative() <= params.tolerance
+                && self.residual_of(p, g, nu).relative() <= params.tolerance
             {
                 return (it, true);
             }
@@ -402,6 +419,14 @@ impl Pgs {
             let pt = self.polygon.tangential(&lambda[base..base + p.nd]);
             self.x.extend_from_slice(&pt);
         }
+        let motors = p.motor_rows();
+        self.x
+            .extend_from_slice(&lambda[motors..motors + p.motor_cap.len()]);
+    }
+
+    /// Where motor `k`'s impulse is in `x`.
+    fn motor_at(p: &PgsProblem, k: usize) -> usize {
+        p.nb + p.nc + 2 * p.friction_of.len() + k
     }
 
     /// The impulses `lambda` of every row from the iterate `x`: each
@@ -415,6 +440,9 @@ impl Pgs {
             let pt = [self.x[rows + 2 * f], self.x[rows + 2 * f + 1]];
             self.polygon.decompose(pt, &mut lambda[base..base + p.nd]);
         }
+        let (motors, nm) = (p.motor_rows(), p.motor_cap.len());
+        let at = Self::motor_at(p, 0);
+        lambda[motors..motors + nm].copy_from_slice(&self.x[at..at + nm]);
     }
 
     /// The diagonal, the weighted rows and the friction blocks of `p`.
@@ -444,6 +472,9 @@ impl Pgs {
         self.coords.clear();
         self.coord_start.clear();
         self.coord_start.push(0);
+        self.motors.clear();
+        self.motor_start.clear();
+        self.motor_start.push(0);
         // Ascending, as `x` is laid out (rows, then the blocks in the order
         // of their normal rows): one island's momentum then sums in the
         // same order as the whole iterate's did, and a scene of one island
@@ -463,6 +494,15 @@ impl Pgs {
                     self.coords.extend([at, at + 1]);
                 }
             }
+            // Its motors (an island's by its joint's rows), after every
+            // block in `x`: the list stays ascending.
+            for (k, &r) in p.motor_row.iter().enumerate() {
+                if p.groups.island_of_row(r) == g {
+                    self.motors.push(k as u32);
+                    self.coords.push(Self::motor_at(p, k) as u32);
+                }
+            }
+            self.motor_start.push(self.motors.len() as u32);
             self.coord_start.push(self.coords.len() as u32);
         }
         self.tangent.clear();
@@ -484,6 +524,14 @@ impl Pgs {
             self.weighted.push(w1);
             self.weighted.push(w2);
             self.tangent.push(Tangent { t1, t2, inv, scale });
+        }
+        // The motors' rows, after the blocks in `x` (and so after every
+        // island's other coordinates: each island's list stays ascending).
+        self.motor_diag.clear();
+        for row in &p.rows[p.motor_rows()..] {
+            let w = row.weighted(p.minv);
+            self.motor_diag.push(row.dot(&w));
+            self.weighted.push(w);
         }
     }
 
@@ -508,8 +556,44 @@ impl Pgs {
                 largest = largest.max(self.update_block(p, f, i, omega, &mut x, nu));
             }
         }
+        let (lo, hi) = (
+            self.motor_start[g] as usize,
+            self.motor_start[g + 1] as usize,
+        );
+        for t in lo..hi {
+            let k = self.motors[t] as usize;
+            largest = largest.max(self.update_motor(p, k, omega, &mut x, nu));
+        }
         self.x = x;
         largest
+    }
+
+    /// Motor `k`'s update, projected on its box `[-F h, F h]`; its
+    /// velocity change (m/s or rad/s).
+    fn update_motor(
+        &self,
+        p: &PgsProblem,
+        k: usize,
+        omega: f64,
+        x: &mut [f64],
+        nu: &mut [f64],
+    ) -> f64 {
+        let d = self.motor_diag[k];
+        if d <= 0.0 {
+            return 0.0;
+        }
+        let (at, row) = (Self::motor_at(p, k), p.motor_rows() + k);
+        let lam = x[at];
+        let res = p.rows[row].velocity(nu) + p.offset[row];
+        let cap = p.motor_cap[k];
+        let new = (lam - omega * res / d).clamp(-cap, cap);
+        let delta = new - lam;
+        if delta == 0.0 {
+            return 0.0;
+        }
+        x[at] = new;
+        self.weighted[at].add_to(delta, nu);
+        delta.abs() * d
     }
 
     /// A joint (`unilateral` false) or normal row's update; its velocity
@@ -653,9 +737,14 @@ impl Pgs {
         z: &mut Vec<f64>,
     ) -> f64 {
         self.scatter(p, lambda);
-        let m = p.rows.len() - p.nb;
+        let motors = p.motor_rows();
+        let m = motors - p.nb + 2 * p.motor_cap.len();
         z.clear();
-        z.extend_from_slice(&lambda[p.nb..]);
+        z.extend_from_slice(&lambda[p.nb..motors]);
+        // A motor's pair `(p+, p-)` (mlcp.rs, `form_matrix`).
+        for &l in &lambda[motors..] {
+            z.extend([l.max(0.0), (-l).max(0.0)]);
+        }
         for f in 0..p.friction_of.len() {
             let base = p.nb + p.nc + f * p.nd;
             let s = (0..p.nd)
@@ -663,10 +752,13 @@ impl Pgs {
                 .fold(0.0f64, f64::max);
             z.push(s);
         }
-        debug_assert_eq!(z.len(), m + p.friction_of.len());
+        for k in 0..p.motor_cap.len() {
+            z.push(motor_slack(p, k, lambda[motors + k], nu));
+        }
+        debug_assert_eq!(z.len(), m + p.friction_of.len() + p.motor_cap.len());
         let mut all = Parts::default();
         for g in 0..p.groups.len() {
-            let part = self.residual_of(p, p.groups.rows_of(g), nu);
+            let part = self.residual_of(p, g, nu);
             all.abs2 += part.abs2;
             all.q2 += part.q2;
             all.joint2 += part.joint2;
@@ -691,14 +783,20 @@ impl Pgs {
     ///   `r - proj_K(r - (u + mu |u_T| e_N))`, `r = [p_n, p_t]`,
     ///   `u = [v_n + a_n, v_t]`;
     ///
-    /// and the squares of the LCP's `q` over the rows' unknowns.
-    fn residual_of(&mut self, p: &PgsProblem, rows: &[u32], nu: &[f64]) -> Parts {
+    /// - a motor: the natural map of its box, `p - clamp(p - w, -F h, F h)`
+    ///   with `w = x' - v*` (Lemke's measure on its pair and slack where
+    ///   the rest holds);
+    ///
+    /// and the squares of the LCP's `q` over the rows' unknowns. Over
+    /// island `g`'s rows and motors.
+    fn residual_of(&mut self, p: &PgsProblem, g: usize, nu: &[f64]) -> Parts {
+        let rows = p.groups.rows_of(g);
         let term = |zi: f64, wi: f64| {
             let r = zi - (zi - wi).max(0.0);
             r * r
         };
         let nd = p.nd;
-        let m = p.nc + p.friction_of.len() * nd;
+        let m = p.motor_rows() - p.nb + 2 * p.motor_cap.len();
         let mut out = Parts::default();
         let mut dirs = std::mem::take(&mut self.dirs);
         dirs.resize(nd, 0.0);
@@ -751,7 +849,37 @@ impl Pgs {
             out.abs2 += term(s, mu * pn - total);
         }
         self.dirs = dirs;
+        let (lo, hi) = (
+            self.motor_start[g] as usize,
+            self.motor_start[g + 1] as usize,
+        );
+        let nf = p.friction_of.len();
+        for t in lo..hi {
+            let k = self.motors[t] as usize;
+            let row = p.motor_rows() + k;
+            let (l, cap) = (x[Self::motor_at(p, k)], p.motor_cap[k]);
+            let w = p.rows[row].velocity(nu) + p.offset[row];
+            let r = l - (l - w).clamp(-cap, cap);
+            out.abs2 += r * r;
+            let at = p.nc + nf * nd + 2 * k;
+            out.q2 += p.lcp.q[at].powi(2) + p.lcp.q[at + 1].powi(2) + p.lcp.q[m + nf + k].powi(2);
+        }
         out
+    }
+}
+
+/// Motor `k`'s slack `s_m` at its impulse `l` (mlcp.rs, `form_matrix`):
+/// `|x' - v*|` on the side its bound pushes, zero inside the box.
+fn motor_slack(p: &PgsProblem, k: usize, l: f64, nu: &[f64]) -> f64 {
+    let row = p.motor_rows() + k;
+    let w = p.rows[row].velocity(nu) + p.offset[row];
+    let cap = p.motor_cap[k];
+    if l >= cap {
+        (-w).max(0.0)
+    } else if l <= -cap {
+        w.max(0.0)
+    } else {
+        0.0
     }
 }
 

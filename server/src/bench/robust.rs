@@ -178,8 +178,8 @@ pub fn scene(seed: u64) -> String {
     // 0..3 joints: to the world at an anchor near a sphere (its pin
     // direction anywhere, inside a friction cone too), or between two
     // spheres at their midpoint; spherical, revolute or prismatic (a
-    // random axis) or fixed; some with a constant torque, some with
-    // `collide = false`.
+    // random axis, half of them limited, a third with a motor) or fixed;
+    // some with a constant torque, some with `collide = false`.
     let n = centres.len();
     // The kind of each joint comes from a stream of its own, so that every
     // other draw (and so every scene of spherical joints before kinds were
@@ -228,6 +228,23 @@ pub fn scene(seed: u64) -> String {
                 let to = if kind == 1 { "revolute" } else { "prismatic" };
                 text = text.replacen("\"spherical\"", &format!("{to:?}"), 1);
                 text += &format!("axis = [{:e}, {:e}, {:e}]\n", axis[0], axis[1], axis[2]);
+                // Half of them limited (rad or m; the coordinate is 0 at
+                // the start), a third of those with a bouncing limit.
+                if kinds.uniform() < 0.5 {
+                    let (lo, hi) = (-kinds.range(0.01, 1.0), kinds.range(0.01, 1.0));
+                    text += &format!("range = [{lo:e}, {hi:e}]\n");
+                    if kinds.uniform() < 0.3 {
+                        text += "limit_restitution = 0.5\n";
+                    }
+                }
+                // A third with a motor (rad/s or m/s; N m or N).
+                if kinds.uniform() < 0.3 {
+                    text += &format!(
+                        "motor = {{ speed = {:e}, max_effort = {:e} }}\n",
+                        kinds.range(-2.0, 2.0),
+                        kinds.range(0.05, 2.0)
+                    );
+                }
             }
             _ => text = text.replacen("type = \"spherical\"", "type = \"fixed\"", 1),
         }
@@ -370,7 +387,20 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
             .zip(&engine.state().bodies)
             .map(|(b, s)| h * b.mass * g.dot(&s.v) + 0.5 * h * h * b.mass * g.norm_squared())
             .sum();
-        let k_in = k_free - k_start - gravity_work;
+        // And the inputs' part of the midpoint energy's offset: per step
+        // `dE_mid = (K' - K_free) + (K_free - K) - (h/2) sum m g . (v_free
+        // + v) - (h/2) sum m g . dv` (dv the constraints' change, `support`
+        // below); with `v_free = v + h g + a`, the free part is `k_in -
+        // (h/2) sum m g . a`, `a` the inputs' linear change (a slider's
+        // force has one; found when a motor pushed a slider force's body
+        // below its free motion, seed 9682: 8.9e-7 J over the bound).
+        let input_offset: f64 = m
+            .bodies
+            .iter()
+            .zip(engine.state().bodies.iter().zip(&free))
+            .map(|(b, (s, (vf, _)))| -0.5 * h * b.mass * g.dot(&(vf - s.v - h * g)))
+            .sum();
+        let k_in = k_free - k_start - gravity_work + input_offset;
         let r = engine.step();
         out.steps += 1;
         out.ladder.add(&r);

@@ -57,7 +57,7 @@ pub fn fill(f: &mut StateFrame, engine: &Engine, report: Option<&StepReport>, ca
                 }
             }
             // Not on the wire (protocol.md: a joint's anchor impulse only).
-            ImpulseKind::JointTorque => {}
+            ImpulseKind::JointTorque | ImpulseKind::JointLimit | ImpulseKind::JointMotor => {}
             ImpulseKind::Normal | ImpulseKind::Friction => {
                 // The records of one contact are consecutive: normal, then
                 // friction.

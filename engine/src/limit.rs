@@ -1,0 +1,105 @@
+//! Joint limits: a hinge's angle or a slider's offset kept within its
+//! `[lower, upper]` by one unilateral row per side, listed as a contact.
+//!
+//! A limit is complementarity like a contact's normal row: the gap is the
+//! coordinate's distance to the limit (`x - lower`, `upper - x`, in rad or
+//! m), the row's velocity is the gap's rate, and the impulse only pushes
+//! the coordinate back into its range. Listed among the contacts (mu = 0,
+//! no friction rows), it gets everything a contact has with no code of its
+//! own: the normal offset (`mlcp::normal_offset`: a gap that may close
+//! exactly, the stabilisation of a violation, Newton restitution), the
+//! pruning and the velocity check, the warm start by id, the islands, both
+//! solvers, and the fallback ladder with its energy check. Its id is past
+//! every shape contact's (`Model::limit_id`), so the list stays in
+//! ascending id.
+//!
+//! The rows, with `u` the axis in the world (A's) and `x` the coordinate
+//! (`joint::coordinate`, whose rate they reproduce exactly):
+//! - Hinge: `x' = u . (w_B - w_A)`, the turning row about `-u`
+//!   (`Row::turning(p)` reads `p . (w_A - w_B)`); the upper limit's
+//!   about `+u`.
+//! - Slider: `x' = -(u . (v_A + w_A x (p_B - x_A)) - u . v_pB)`, the row
+//!   along `-u` with A's lever arm at B's anchor, as the slider's own rows
+//!   (joint.rs): `d/dt (u . d) = u . (v_pB - v_pA) + (w_A x u) . d` with
+//!   `d = p_B - p_A`, and `(w_A x u) . d = -u . (w_A x d)`.
+//!
+//! A joint of a body to the world: the contact's first side must be a
+//! body, so B takes it with the row negated (`Row::along(dir, None, B)`
+//! is `Row::along(-dir, B, None)`, and likewise a turning row).
+
+use crate::collision::{Counterpart, Geometry};
+use crate::contact::{Contact, Limit};
+use crate::joint::coordinate;
+use crate::mlcp::anchor;
+use crate::model::{Attachment, Model, Turning};
+use crate::rows::Row;
+use crate::state::State;
+use nalgebra::{UnitQuaternion, Vector3};
+
+/// Appends a contact for each side of each limited joint, in joint order
+/// (ascending id).
+pub fn limits(model: &Model, state: &State, out: &mut Vec<Contact>) {
+    for (j, joint) in model.joints.iter().enumerate() {
+        let (Some(lim), Some((x, _))) = (joint.limits, coordinate(joint, state)) else {
+            continue;
+        };
+        let qa = match joint.a {
+            Attachment::World => UnitQuaternion::identity(),
+            Attachment::Body(i) => state.bodies[i].q,
+        };
+        let (angular, axis) = match (joint.slide, joint.turning) {
+            (Some(axis), _) => (false, axis),
+            (None, Turning::Axis { a, .. }) => (true, a),
+            // `coordinate` gives none for the other joints.
+            _ => continue,
+        };
+        let u = qa * axis;
+        let (pa, ra) = anchor(joint.a, &joint.local_a, state);
+        let (pb, rb) = anchor(joint.b, &joint.local_b, state);
+        // A's lever arm at B's anchor (the slider's rows'); unused by a
+        // turning row.
+        let ra = ra.map(|(i, r)| (i, r + (pb - pa)));
+        let (first, other) = model.limit_bodies(j);
+        for upper in [false, true] {
+            let (gap, dir) = if upper {
+                (lim.upper - x, u)
+            } else {
+                (x - lim.lower, -u)
+            };
+            // The row with A as the contact's first side, or negated with
+            // B first (see the module's note).
+            let (normal, r_a, r_b) = match (ra, rb) {
+                (Some((_, r_a)), rb) => (dir, r_a, rb.map_or_else(Vector3::zeros, |(_, r)| r)),
+                (None, Some((_, r_b))) => (-dir, r_b, Vector3::zeros()),
+                (None, None) => continue,
+            };
+            let mut c = Contact {
+                id: model.limit_id(j, upper),
+                geom: Geometry {
+                    a: first,
+                    b: other,
+                    gap,
+                    normal,
+                    point: pb,
+                    r_a,
+                    r_b,
+                },
+                mu: 0.0,
+                e: lim.restitution,
+                t1: crate::contact::perpendicular(&normal),
+                t2: Vector3::zeros(),
+                v_n: 0.0,
+                in_lcp: false,
+                limit: Some(Limit {
+                    joint: j,
+                    upper,
+                    angular,
+                }),
+            };
+            c.t2 = normal.cross(&c.t1);
+            c.v_n = Row::contact(&c, normal).state_velocity(state);
+            debug_assert!(matches!(other, Counterpart::Body(_) | Counterpart::World));
+            out.push(c);
+        }
+    }
+}
