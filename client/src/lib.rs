@@ -683,9 +683,11 @@ impl Controller {
         // step when every reader polls).
         let reader = StateReader::open(&conn.node, name, 2, wait != WaitMode::Spin)?;
         let info = conn.info()?;
-        // Room for a torque on every joint and a few impulses; a larger
-        // input grows the publisher's memory (power-of-two strategy), once.
-        let words = input_words(info.joint_count as usize, 8);
+        // Room for a torque and a motor target on every joint and a few
+        // impulses; a larger input grows the publisher's memory
+        // (power-of-two strategy), once.
+        let joints = info.joint_count as usize;
+        let words = input_words(joints, 8, joints);
         let input = conn
             .node
             .service_builder(&service_name(&services::input(name))?)

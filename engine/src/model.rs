@@ -593,6 +593,11 @@ impl Model {
         self.weld[i] != self.weld[j] && self.excluded.binary_search(&(i.min(j), i.max(j))).is_err()
     }
 
+    /// Per joint, whether it has a motor (what a motor target may name).
+    pub fn motored(&self) -> Vec<bool> {
+        self.joints.iter().map(|j| j.motor.is_some()).collect()
+    }
+
     /// The contact id of joint `joint`'s lower (`upper = false`) or upper
     /// limit: past every potential contact of the shapes, so that the
     /// contact list, limits last, ascends by id.

@@ -34,6 +34,8 @@ from .wire import (
     ControlResponse,
     InputHeader,
     JointTorque,
+    MotorTarget,
+    MOTOR_WORDS,
     State,
     StateHeader,
 )
@@ -234,7 +236,7 @@ class Controller:
             .user_header(InputHeader)
             .open(),
         ).publisher_builder().initial_max_slice_len(
-            max(1, TORQUE_WORDS * joints + IMPULSE_WORDS * 8)
+            max(1, (TORQUE_WORDS + MOTOR_WORDS) * joints + IMPULSE_WORDS * 8)
         ).allocation_strategy(iox2.AllocationStrategy.PowerOfTwo).create()
         self.info = self.connection.request(CMD_JOIN, role=ROLE_CONTROLLER)
         self.id = self.info.controller_id
@@ -309,11 +311,14 @@ class Controller:
         self,
         torques: Mapping[int, Sequence[float]] = {},
         impulses: Mapping[int, Tuple[Sequence[float], Sequence[float]]] = {},
+        motors: Mapping[int, float] = {},
     ):
         """Answers the last state: joint efforts (world frame, held until
         changed) by joint index, a torque in N m, or for a prismatic joint
-        a force in N at its body_b's anchor; and one-step body impulses
-        (linear N s, angular N m s) by body index."""
+        a force in N at its body_b's anchor; one-step body impulses
+        (linear N s, angular N m s) by body index; and motor targets (rad/s
+        or m/s, held until changed) by the index of a joint with a
+        motor."""
         state = self.last
         step = state.step if state is not None else 0
         self._sequence += 1
@@ -324,6 +329,7 @@ class Controller:
             sequence=self._sequence,
             torque_count=len(torques),
             impulse_count=len(impulses),
+            motor_count=len(motors),
         )
         entries = [
             JointTorque(joint=j, torque=(ctypes.c_double * 3)(*np.asarray(t, float)))
@@ -335,8 +341,12 @@ class Controller:
                 angular=(ctypes.c_double * 3)(*np.asarray(ang, float)),
             )
             for b, (lin, ang) in impulses.items()
-        ]
-        words = TORQUE_WORDS * len(torques) + IMPULSE_WORDS * len(impulses)
+        ] + [MotorTarget(joint=j, speed=float(v)) for j, v in motors.items()]
+        words = (
+            TORQUE_WORDS * len(torques)
+            + IMPULSE_WORDS * len(impulses)
+            + MOTOR_WORDS * len(motors)
+        )
         sample = self._input.loan_slice_uninit(words)
         ctypes.memmove(sample.user_header_ptr, ctypes.byref(header), ctypes.sizeof(header))
         at = sample.payload_ptr

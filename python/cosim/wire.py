@@ -1,4 +1,4 @@
-"""The wire types of protocol 2 (docs/protocol.md), as ctypes structures
+"""The wire types of protocol 4 (docs/protocol.md), as ctypes structures
 whose layouts and type names match the Rust definitions
 (shared/src/wire.rs), and their numpy views."""
 
@@ -6,7 +6,7 @@ import ctypes
 
 import numpy as np
 
-PROTOCOL_VERSION = 3
+PROTOCOL_VERSION = 4
 MAX_CONTROLLERS = 8
 MESSAGE_LEN = 120
 
@@ -28,7 +28,7 @@ SLOT_JOINED, SLOT_MISSED, SLOT_ANSWERED = 1, 2, 4
 
 # Words (8 bytes) of each entry in a payload.
 BODY_WORDS, JOINT_WORDS, CONTACT_WORDS = 13, 5, 8
-TORQUE_WORDS, IMPULSE_WORDS = 4, 7
+TORQUE_WORDS, IMPULSE_WORDS, MOTOR_WORDS = 4, 7, 2
 
 
 class ControllerSlot(ctypes.Structure):
@@ -64,7 +64,7 @@ class StateHeader(ctypes.Structure):
 
     @staticmethod
     def type_name() -> str:
-        return "cosim::StateHeader.v3"
+        return "cosim::StateHeader.v4"
 
 
 class JointTorque(ctypes.Structure):
@@ -84,6 +84,14 @@ class BodyImpulse(ctypes.Structure):
     ]
 
 
+class MotorTarget(ctypes.Structure):
+    _fields_ = [
+        ("joint", ctypes.c_uint32),
+        ("_pad", ctypes.c_uint32),
+        ("speed", ctypes.c_double),
+    ]
+
+
 class InputHeader(ctypes.Structure):
     _fields_ = [
         ("version", ctypes.c_uint32),
@@ -92,11 +100,13 @@ class InputHeader(ctypes.Structure):
         ("sequence", ctypes.c_uint64),
         ("torque_count", ctypes.c_uint32),
         ("impulse_count", ctypes.c_uint32),
+        ("motor_count", ctypes.c_uint32),
+        ("_pad", ctypes.c_uint32),
     ]
 
     @staticmethod
     def type_name() -> str:
-        return "cosim::InputHeader.v3"
+        return "cosim::InputHeader.v4"
 
 
 class ControlRequest(ctypes.Structure):
@@ -113,7 +123,7 @@ class ControlRequest(ctypes.Structure):
 
     @staticmethod
     def type_name() -> str:
-        return "cosim::ControlRequest.v3"
+        return "cosim::ControlRequest.v4"
 
 
 class ControlResponse(ctypes.Structure):
@@ -137,7 +147,7 @@ class ControlResponse(ctypes.Structure):
 
     @staticmethod
     def type_name() -> str:
-        return "cosim::ControlResponse.v3"
+        return "cosim::ControlResponse.v4"
 
     def text(self) -> str:
         return bytes(self.message).split(b"\0")[0].decode("utf-8", "replace")
@@ -145,7 +155,8 @@ class ControlResponse(ctypes.Structure):
 
 # The sizes docs/protocol.md states.
 assert ctypes.sizeof(StateHeader) == 280
-assert ctypes.sizeof(InputHeader) == 32
+assert ctypes.sizeof(InputHeader) == 40
+assert ctypes.sizeof(MotorTarget) == 8 * MOTOR_WORDS
 assert ctypes.sizeof(JointTorque) == 8 * TORQUE_WORDS
 assert ctypes.sizeof(BodyImpulse) == 8 * IMPULSE_WORDS
 assert ctypes.sizeof(ControlRequest) == 48

@@ -2374,3 +2374,99 @@ fn a_python_pd_controller_holds_a_slider_at_its_target() {
         &rail[2990..]
     );
 }
+
+/// The shipped limits scene (its rail has a motor: joint 2).
+const LIMITS: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../examples/scenes/limits.toml"
+);
+
+/// Issue 17: a controller sets a motor's target over the wire (protocol
+/// 4). limits.toml served with a controller that slows the rail's motor
+/// to 0.3 m/s from step 10 and sends, once each, a target for a joint
+/// without a motor and a non-finite one (both refused, named, the run
+/// going on): the served run is an offline one with the same target from
+/// the same step, to the bit; the replay log holds the change and replays
+/// to the same hashes.
+#[test]
+fn a_controllers_motor_target_drives_the_served_run_and_replays() {
+    use cosim_server::engine::{joint, Engine, Model};
+    let steps = 200u64;
+    let (server, dir, name) = serve_test(
+        "motor-targets",
+        &[
+            LIMITS,
+            "--controllers",
+            "1",
+            "--steps",
+            &steps.to_string(),
+            "--deadline-ms",
+            "5000",
+        ],
+    );
+    let mut c = Controller::join(&name, WaitMode::Block).expect("join");
+    let mut last = None;
+    answer_until_shutdown(&mut c, |c| {
+        let f = c.last_state().expect("a state").clone();
+        let mut input = InputFrame::default();
+        match f.step {
+            5 => input.push_motor(0, 1.0),
+            6 => input.push_motor(2, f64::NAN),
+            k if k >= 10 => input.push_motor(2, 0.3),
+            _ => {}
+        }
+        last = Some((f.step, f.joint_coordinates[2]));
+        c.send(input).expect("send");
+    });
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    let s = summary(dir.path());
+    assert_eq!(s["steps"], steps, "the run went on");
+    let r = &s["inputs_rejected"];
+    assert_eq!(r["unknown_index"], 1, "{s}");
+    assert_eq!(r["non_finite"], 1, "{s}");
+    // Offline: the scene's target until step 10, then 0.3 m/s, to the
+    // last frame the controller answered.
+    let (seen, coords) = last.expect("frames");
+    let text = std::fs::read_to_string(LIMITS).unwrap();
+    let mut e = Engine::new(Model::from_scene(
+        &cosim_shared::Scene::parse(&text, LIMITS).unwrap(),
+    ));
+    for k in 0..seen {
+        if k == 10 {
+            e.set_motor_speed(2, 0.3).unwrap();
+        }
+        assert!(e.step().ok());
+    }
+    let rail = joint::coordinate(&e.model().joints[2], e.state()).unwrap();
+    assert_eq!(
+        coords,
+        [rail.0, rail.1],
+        "the served run is the offline one at step {seen}"
+    );
+    // Near 0.2 s the car runs at the new target, not the scene's 0.8 m/s.
+    assert!((rail.1 - 0.3).abs() < 1e-9, "rail rate {}", rail.1);
+    let log = std::fs::read_to_string(dir.path().join("replay.csv")).unwrap();
+    assert!(log.contains("\nmotor,10,2,0.3\n"), "{log}");
+    let inputs = std::fs::read_to_string(dir.path().join("inputs.csv")).unwrap();
+    assert!(inputs.contains(",unknown_index,motor,0,1,"), "{inputs}");
+    let (ok, out) = replay(dir.path());
+    assert!(ok, "{out}");
+}
+
+/// examples/python/motor_controller.py: a Python controller sets the rail
+/// motor of limits.toml to 0.3 m/s (protocol 4's motor target) and reads
+/// the rate back from the frames: the car runs at 0.3 m/s, not the scene's
+/// 0.8, to round-off (Lemke), 0.15 s in (before its end stop).
+#[test]
+fn a_python_controller_sets_a_motor_target() {
+    let (server, _dir, name) = serve_test(
+        "python-motor",
+        &[LIMITS, "--controllers", "1", "--steps", "150"],
+    );
+    let text = python_example("motor_controller.py", &["--name", &name, "--speed", "0.3"]);
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    let rate = printed_after(&text, "rail rate ");
+    assert!((rate - 0.3).abs() < 1e-9, "{text}");
+}

@@ -19,7 +19,7 @@ use core::mem::MaybeUninit;
 use iceoryx2::prelude::ZeroCopySend;
 
 /// Version of the wire types (also in every `type_name`).
-pub const PROTOCOL_VERSION: u32 = 3;
+pub const PROTOCOL_VERSION: u32 = 4;
 
 /// Controllers that can be joined at once.
 pub const MAX_CONTROLLERS: usize = 8;
@@ -35,6 +35,8 @@ pub const CONTACT_WORDS: usize = 8;
 pub const TORQUE_WORDS: usize = 4;
 /// Words of one [`BodyImpulse`] in an input payload.
 pub const IMPULSE_WORDS: usize = 7;
+/// Words of one [`MotorTarget`] in an input payload.
+pub const MOTOR_WORDS: usize = 2;
 
 /// Contacts a state frame carries at most, for a scene of `bodies` bodies
 /// with `potential` potential contacts: four per body (a sphere in a
@@ -58,8 +60,8 @@ pub fn state_words(bodies: usize, joints: usize, contacts: usize) -> usize {
 pub const MAX_FRAME_BYTES: usize = 16 << 20;
 
 /// Words of an input payload with these counts.
-pub fn input_words(torques: usize, impulses: usize) -> usize {
-    TORQUE_WORDS * torques + IMPULSE_WORDS * impulses
+pub fn input_words(torques: usize, impulses: usize, motors: usize) -> usize {
+    TORQUE_WORDS * torques + IMPULSE_WORDS * impulses + MOTOR_WORDS * motors
 }
 
 /// Service names: one function per service, no string literals elsewhere.
@@ -185,7 +187,7 @@ pub const SLOT_ANSWERED: u32 = 4;
 /// A joined controller as the state frame reports it.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::ControllerSlot.v3")]
+#[type_name("cosim::ControllerSlot.v4")]
 pub struct ControllerSlot {
     /// Controller id given at join (0: slot unused).
     pub id: u32,
@@ -253,7 +255,7 @@ impl core::fmt::Display for WireError {
 /// impulses, `contacts_carried` contacts.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::StateHeader.v3")]
+#[type_name("cosim::StateHeader.v4")]
 pub struct StateHeader {
     /// [`PROTOCOL_VERSION`].
     pub version: u32,
@@ -678,7 +680,7 @@ pub struct BodyImpulse {
 /// `impulse_count` impulses follow in the payload words.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::InputHeader.v3")]
+#[type_name("cosim::InputHeader.v4")]
 pub struct InputHeader {
     /// [`PROTOCOL_VERSION`].
     pub version: u32,
@@ -690,13 +692,28 @@ pub struct InputHeader {
     pub sequence: u64,
     pub torque_count: u32,
     pub impulse_count: u32,
+    pub motor_count: u32,
+    pub _pad: u32,
+}
+
+/// A joint motor's target rate (rad/s for a hinge, m/s for a slider),
+/// held until changed. [`MOTOR_WORDS`] words: `joint` (the low half of the
+/// first word), then the speed.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct MotorTarget {
+    pub joint: u32,
+    pub _pad: u32,
+    pub speed: f64,
 }
 
 /// A controller's answer to state frame `step`.
 ///
 /// Torques listed are held by this controller until it sends another
 /// value for the joint; the server applies the sum over controllers.
-/// Impulses act on the next step only.
+/// Motor targets are held likewise; where several controllers hold one
+/// for the same joint, the lowest controller id's applies. Impulses act
+/// on the next step only.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InputFrame {
     /// [`PROTOCOL_VERSION`].
@@ -709,6 +726,7 @@ pub struct InputFrame {
     pub sequence: u64,
     pub torques: Vec<JointTorque>,
     pub impulses: Vec<BodyImpulse>,
+    pub motors: Vec<MotorTarget>,
 }
 
 impl Default for InputFrame {
@@ -720,6 +738,7 @@ impl Default for InputFrame {
             sequence: 0,
             torques: Vec::new(),
             impulses: Vec::new(),
+            motors: Vec::new(),
         }
     }
 }
@@ -731,6 +750,14 @@ impl InputFrame {
             joint,
             _pad: 0,
             torque,
+        });
+    }
+    /// Appends a motor target.
+    pub fn push_motor(&mut self, joint: u32, speed: f64) {
+        self.motors.push(MotorTarget {
+            joint,
+            _pad: 0,
+            speed,
         });
     }
     /// Appends a body impulse.
@@ -752,15 +779,17 @@ impl InputFrame {
             sequence: self.sequence,
             torque_count: self.torques.len() as u32,
             impulse_count: self.impulses.len() as u32,
+            motor_count: self.motors.len() as u32,
+            _pad: 0,
         }
     }
 
     /// Payload words of this frame.
     pub fn words(&self) -> usize {
-        input_words(self.torques.len(), self.impulses.len())
+        input_words(self.torques.len(), self.impulses.len(), self.motors.len())
     }
 
-    /// Writes the payload: torques, then impulses.
+    /// Writes the payload: torques, then impulses, then motor targets.
     pub fn encode(&self, sink: &mut impl WordSink) {
         for t in &self.torques {
             sink.put(pair(t.joint, 0));
@@ -770,6 +799,10 @@ impl InputFrame {
             sink.put(pair(b.body, 0));
             put_f64s(sink, &b.linear);
             put_f64s(sink, &b.angular);
+        }
+        for m in &self.motors {
+            sink.put(pair(m.joint, 0));
+            put_f64s(sink, &[m.speed]);
         }
     }
 
@@ -784,6 +817,8 @@ impl InputFrame {
             sequence,
             torque_count,
             impulse_count,
+            motor_count,
+            _pad,
         } = header;
         self.version = version;
         self.controller_id = controller_id;
@@ -791,8 +826,15 @@ impl InputFrame {
         self.sequence = sequence;
         self.torques.clear();
         self.impulses.clear();
-        let (nt, ni) = (torque_count as usize, impulse_count as usize);
-        let expected = TORQUE_WORDS as u128 * nt as u128 + IMPULSE_WORDS as u128 * ni as u128;
+        self.motors.clear();
+        let (nt, ni, nm) = (
+            torque_count as usize,
+            impulse_count as usize,
+            motor_count as usize,
+        );
+        let expected = TORQUE_WORDS as u128 * nt as u128
+            + IMPULSE_WORDS as u128 * ni as u128
+            + MOTOR_WORDS as u128 * nm as u128;
         if expected != words.len() as u128 {
             return Err(WireError::Length {
                 what: "input frame",
@@ -800,7 +842,8 @@ impl InputFrame {
                 got: words.len(),
             });
         }
-        let (t, b) = words.split_at(TORQUE_WORDS * nt);
+        let (t, rest) = words.split_at(TORQUE_WORDS * nt);
+        let (b, m) = rest.split_at(IMPULSE_WORDS * ni);
         self.torques
             .extend(t.chunks_exact(TORQUE_WORDS).map(|w| JointTorque {
                 joint: split(w[0]).0,
@@ -813,6 +856,12 @@ impl InputFrame {
                 _pad: 0,
                 linear: f3(&w[1..4]),
                 angular: f3(&w[4..7]),
+            }));
+        self.motors
+            .extend(m.chunks_exact(MOTOR_WORDS).map(|w| MotorTarget {
+                joint: split(w[0]).0,
+                _pad: 0,
+                speed: f64::from_bits(w[1]),
             }));
         Ok(())
     }
@@ -928,7 +977,7 @@ pub const ROLE_MONITOR: u32 = 2;
 
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("cosim::ControlRequest.v3")]
+#[type_name("cosim::ControlRequest.v4")]
 pub struct ControlRequest {
     /// [`PROTOCOL_VERSION`].
     pub version: u32,
@@ -961,7 +1010,7 @@ pub const MESSAGE_LEN: usize = 120;
 
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("cosim::ControlResponse.v3")]
+#[type_name("cosim::ControlResponse.v4")]
 pub struct ControlResponse {
     pub version: u32,
     /// `RESP_*`.
@@ -1138,6 +1187,9 @@ mod tests {
             for i in 0..nb.min(50) {
                 input.push_impulse(u32::MAX - i as u32, [0.5; 3], [-0.25; 3]);
             }
+            for i in 0..nj.min(3) {
+                input.push_motor(i as u32, -(k as f64) * 0.5);
+            }
             let mut words = Vec::new();
             input.encode(&mut words);
             assert_eq!(words.len(), input.words());
@@ -1227,7 +1279,8 @@ mod tests {
         assert_eq!(size_of::<BodyImpulse>(), 8 * IMPULSE_WORDS);
         assert_eq!(size_of::<ControllerSlot>(), 24);
         assert_eq!(size_of::<StateHeader>(), 88 + 24 * MAX_CONTROLLERS);
-        assert_eq!(size_of::<InputHeader>(), 32);
+        assert_eq!(size_of::<MotorTarget>(), 8 * MOTOR_WORDS);
+        assert_eq!(size_of::<InputHeader>(), 40);
         assert_eq!(size_of::<ControlRequest>(), 48);
         assert_eq!(size_of::<ControlResponse>(), 80 + MESSAGE_LEN);
         for a in [

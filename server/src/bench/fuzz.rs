@@ -423,6 +423,10 @@ pub fn input_frame(
             let a = [finite(rng), finite(rng), finite(rng)];
             f.push_impulse(rng.below(bodies) as u32, l, a);
         }
+        // Motor targets, for any joint (one without a motor is refused).
+        for _ in 0..rng.below(2).min(joints) {
+            f.push_motor(rng.below(joints) as u32, finite(rng));
+        }
         let mut words = Vec::new();
         f.encode(&mut words);
         return (f.header(), words);
@@ -446,12 +450,15 @@ pub fn input_frame(
         sequence: (rng.uniform() * u64::MAX as f64) as u64,
         torque_count: index(rng, joints + 1),
         impulse_count: index(rng, bodies + 1),
+        motor_count: index(rng, joints + 1),
+        _pad: 0,
     };
     // Mostly as many words as the counts say, else a few more or fewer:
     // a decoder must refuse a mismatch and read nothing past the words.
     let exact = input_words(
         (header.torque_count as usize).min(64),
         (header.impulse_count as usize).min(64),
+        (header.motor_count as usize).min(64),
     );
     let len = match rng.below(4) {
         0 => rng.below(exact + 8),
@@ -519,9 +526,12 @@ pub fn inputs(seed: u64, n: u64) -> Counts {
     };
     let mut engine = Engine::new(Model::from_scene(&scene));
     let initial = engine.state().clone();
+    // The reference scene has no motor: every motor target is refused.
+    let motored = engine.model().motored();
     let lim = Limits {
         joints: engine.model().joints.len(),
         bodies: engine.model().bodies.len(),
+        motored: &motored,
     };
     let mut slot = Slot::new(1, 7, 0, lim.joints);
     let mut rng = Rng::new(seed);
@@ -543,6 +553,12 @@ pub fn inputs(seed: u64, n: u64) -> Counts {
                 engine
                     .set_joint_torque(j, Vector3::from(t))
                     .map_err(|e| format!("a checked torque was refused: {e}"))?;
+                if lim.motored[j] {
+                    let v = controllers::net_motor(std::slice::from_ref(&slot), j, 0.0);
+                    engine
+                        .set_motor_speed(j, v)
+                        .map_err(|e| format!("a checked motor target was refused: {e}"))?;
+                }
             }
             for b in &slot.impulses {
                 engine

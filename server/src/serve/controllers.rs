@@ -6,10 +6,11 @@ use cosim_shared::wire::*;
 /// What to do when a controller's input has not arrived by the deadline.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Default)]
 pub enum MissPolicy {
-    /// Keep the controller's last torques (impulses are never repeated).
+    /// Keep the controller's last torques and motor targets (impulses
+    /// are never repeated).
     #[default]
     Hold,
-    /// Set the controller's torques to zero.
+    /// Set the controller's torques and motor targets to zero.
     Zero,
     /// Pause the simulation until `cosim resume`.
     Pause,
@@ -79,6 +80,8 @@ pub struct Slot {
     /// Torques this controller holds, by joint (None: never set); sized
     /// to the model's joints when it joins.
     pub held: Vec<Option<[f64; 3]>>,
+    /// Motor targets it holds, by joint, likewise.
+    pub held_motor: Vec<Option<f64>>,
     /// Impulses for the coming step.
     pub impulses: Vec<BodyImpulse>,
     /// The step it answered last.
@@ -104,6 +107,7 @@ impl Slot {
             publisher: None,
             pid,
             held: vec![None; joints],
+            held_motor: vec![None; joints],
             impulses: Vec::new(),
             answered: None,
             misses: 0,
@@ -122,15 +126,19 @@ impl Slot {
             for h in self.held.iter_mut().flatten() {
                 *h = [0.0; 3];
             }
+            for m in self.held_motor.iter_mut().flatten() {
+                *m = 0.0;
+            }
         }
     }
 }
 
-/// The sizes inputs are checked against.
+/// The sizes inputs are checked against, and which joints have a motor.
 #[derive(Debug, Clone, Copy)]
-pub struct Limits {
+pub struct Limits<'a> {
     pub joints: usize,
     pub bodies: usize,
+    pub motored: &'a [bool],
 }
 
 /// Why an input was not taken, with the reason bit; `answered` says
@@ -149,7 +157,7 @@ pub fn check(
     well_formed: bool,
     slot: Option<&Slot>,
     step: u64,
-    lim: Limits,
+    lim: Limits<'_>,
 ) -> Result<(), Rejection> {
     let reject = |reason, answered| Err(Rejection { reason, answered });
     if input.version != PROTOCOL_VERSION {
@@ -173,8 +181,14 @@ pub fn check(
     }
     let torques = &input.torques[..];
     let impulses = &input.impulses[..];
+    let motors = &input.motors[..];
+    // A motor target names a joint with a motor (an index of no motor is
+    // unknown, as an index of no joint is).
     if torques.iter().any(|t| t.joint as usize >= lim.joints)
         || impulses.iter().any(|b| b.body as usize >= lim.bodies)
+        || motors
+            .iter()
+            .any(|m| !lim.motored.get(m.joint as usize).copied().unwrap_or(false))
     {
         return reject(REJECT_UNKNOWN_INDEX, true);
     }
@@ -183,12 +197,18 @@ pub fn check(
             return reject(REJECT_DUPLICATE, true);
         }
     }
+    for (i, m) in motors.iter().enumerate() {
+        if motors[..i].iter().any(|u| u.joint == m.joint) {
+            return reject(REJECT_DUPLICATE, true);
+        }
+    }
     let finite = torques
         .iter()
         .all(|t| t.torque.iter().all(|x| x.is_finite()))
         && impulses
             .iter()
-            .all(|b| b.linear.iter().chain(&b.angular).all(|x| x.is_finite()));
+            .all(|b| b.linear.iter().chain(&b.angular).all(|x| x.is_finite()))
+        && motors.iter().all(|m| m.speed.is_finite());
     if !finite {
         return reject(REJECT_NON_FINITE, true);
     }
@@ -218,6 +238,11 @@ pub fn accept(input: &InputFrame, slot: &mut Slot, step: u64) {
             *h = Some(t.torque);
         }
     }
+    for m in &input.motors {
+        if let Some(h) = slot.held_motor.get_mut(m.joint as usize) {
+            *h = Some(m.speed);
+        }
+    }
     slot.impulses.clear();
     slot.impulses.extend_from_slice(&input.impulses);
     slot.answered = Some(step);
@@ -242,6 +267,17 @@ pub fn net_torque(slots: &[Slot], j: usize, scene: [f64; 3]) -> [f64; 3] {
     } else {
         scene
     }
+}
+
+/// The motor target of joint `j`: the one the lowest controller id holds
+/// (a sum of targets means nothing; the choice is deterministic), or the
+/// scene's when none does.
+pub fn net_motor(slots: &[Slot], j: usize, scene: f64) -> f64 {
+    slots
+        .iter()
+        .filter_map(|s| s.held_motor.get(j).copied().flatten().map(|v| (s.id, v)))
+        .min_by_key(|&(id, _)| id)
+        .map_or(scene, |(_, v)| v)
 }
 
 /// The name of a reason bit.
@@ -271,9 +307,11 @@ mod tests {
         assert!(!owns(&mut slot, 7, |_| Some(77)));
     }
 
+    /// Joint 0 has a motor, joint 1 none.
     const LIM: Limits = Limits {
         joints: 2,
         bodies: 2,
+        motored: &[true, false],
     };
 
     fn input(step: u64) -> InputFrame {
@@ -341,6 +379,46 @@ mod tests {
             reason(check(&count, false, Some(&slot), 5, LIM)),
             REJECT_BAD_COUNT
         );
+        // Motor targets: for a joint with a motor, once, finite.
+        let mut motor = input(5);
+        motor.push_motor(0, 1.5);
+        assert_eq!(check(&motor, true, Some(&slot), 5, LIM), Ok(()));
+        for (joint, speed, expect) in [
+            (1, 1.0, REJECT_UNKNOWN_INDEX),
+            (2, 1.0, REJECT_UNKNOWN_INDEX),
+            (0, 2.0, REJECT_DUPLICATE),
+        ] {
+            let mut bad = motor.clone();
+            bad.push_motor(joint, speed);
+            assert_eq!(reason(check(&bad, true, Some(&slot), 5, LIM)), expect);
+        }
+        motor.motors[0].speed = f64::NAN;
+        assert_eq!(
+            reason(check(&motor, true, Some(&slot), 5, LIM)),
+            REJECT_NON_FINITE
+        );
+    }
+
+    /// A motor target is held; the lowest controller id's applies where
+    /// several hold one, the scene's where none does; the zero policy
+    /// stops it.
+    #[test]
+    fn motor_targets_are_held_and_the_lowest_id_applies() {
+        let (mut a, mut b) = (Slot::new(2, 0, 0, 2), Slot::new(1, 0, 0, 2));
+        let mut fa = InputFrame::default();
+        fa.push_motor(0, 3.0);
+        accept(&fa, &mut a, 0);
+        assert_eq!(net_motor(&[a.clone(), b.clone()], 0, 9.0), 3.0);
+        let mut fb = InputFrame::default();
+        fb.push_motor(0, -1.0);
+        accept(&fb, &mut b, 0);
+        accept(&InputFrame::default(), &mut a, 1);
+        let slots = [a, b];
+        assert_eq!(net_motor(&slots, 0, 9.0), -1.0);
+        assert_eq!(net_motor(&slots, 1, 9.0), 9.0);
+        let mut z = slots[0].clone();
+        z.apply_miss(MissPolicy::Zero);
+        assert_eq!(z.held_motor[0], Some(0.0));
     }
 
     #[test]

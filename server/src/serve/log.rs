@@ -5,6 +5,7 @@
 //!
 //! `replay.csv` rows, `op,step,index,v0..v5`:
 //! - `torque,k,j,x,y,z`: joint j's torque from step k on (changes only);
+//! - `motor,k,j,v`: joint j's motor target from step k on (changes only);
 //! - `impulse,k,b,lx,ly,lz,ax,ay,az`: an impulse on body b for step k;
 //! - `step,k,,HASH`: the engine took the step from state k; HASH (16 hex
 //!   digits) is the state hash after it (unchanged state if it failed);
@@ -53,6 +54,10 @@ impl Logs {
         )
     }
 
+    pub fn motor(&mut self, step: u64, joint: usize, speed: f64) -> io::Result<()> {
+        writeln!(self.replay, "motor,{step},{joint},{}", num(speed))
+    }
+
     pub fn impulse(&mut self, step: u64, body: usize, l: [f64; 3], a: [f64; 3]) -> io::Result<()> {
         write!(self.replay, "impulse,{step},{body}")?;
         for v in l.iter().chain(&a) {
@@ -72,14 +77,15 @@ impl Logs {
         }
     }
 
-    /// One input frame: a row per torque and impulse with `status` (
+    /// One input frame: a row per torque, impulse and motor target (its
+    /// speed in `x`) with `status` (
     /// `applied`, or the reason it was rejected), so that a rejected input
     /// keeps the values sent (issue 15: it kept only the reason). A frame
     /// with neither gets one row without values (so does a `bad_count`
     /// frame, whose words did not match its counts).
     pub fn input(&mut self, f: &InputFrame, status: &str) -> io::Result<()> {
         let head = format!("{},{},{},{status}", f.step, f.controller_id, f.sequence);
-        if f.torques.is_empty() && f.impulses.is_empty() {
+        if f.torques.is_empty() && f.impulses.is_empty() && f.motors.is_empty() {
             return writeln!(self.inputs, "{head},,,,,,,,");
         }
         for t in &f.torques {
@@ -99,6 +105,14 @@ impl Logs {
             }
             writeln!(self.inputs)?;
         }
+        for m in &f.motors {
+            writeln!(
+                self.inputs,
+                "{head},motor,{},{},,,,,",
+                m.joint,
+                num(m.speed)
+            )?;
+        }
         Ok(())
     }
 
@@ -115,6 +129,11 @@ pub enum Op {
         step: u64,
         joint: usize,
         t: [f64; 3],
+    },
+    Motor {
+        step: u64,
+        joint: usize,
+        speed: f64,
     },
     Impulse {
         step: u64,
@@ -187,6 +206,11 @@ pub fn read_replay(text: &str, file: &str) -> Result<ReplayLog, String> {
                 step,
                 joint: int(2, "joint")? as usize,
                 t: [float(3)?, float(4)?, float(5)?],
+            },
+            "motor" => Op::Motor {
+                step,
+                joint: int(2, "joint")? as usize,
+                speed: float(3)?,
             },
             "impulse" => Op::Impulse {
                 step,

@@ -242,6 +242,11 @@ struct Server {
     /// The torque last given to the engine, per joint (replay logs changes).
     applied: Vec<[f64; 3]>,
     scene_torque: Vec<[f64; 3]>,
+    /// Per joint: whether it has a motor, the scene's target, and the
+    /// target last given to the engine (replay logs changes).
+    motored: Vec<bool>,
+    scene_motor: Vec<f64>,
+    applied_motor: Vec<f64>,
     c: Counters,
     /// A failed step under `--on-failure abort`: the loop stops.
     failed_stop: bool,
@@ -289,6 +294,8 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         .iter()
         .map(|j| j.effort.into())
         .collect();
+    let motored = engine.model().motored();
+    let scene_motor = engine.inputs().motor_speed.clone();
     let mut s = Server {
         initial: engine.state().clone(),
         snapshots: Vec::new(),
@@ -312,6 +319,9 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         files,
         applied: scene_torque.clone(),
         scene_torque,
+        motored,
+        applied_motor: scene_motor.clone(),
+        scene_motor,
         c: Counters::default(),
         failed_stop: false,
         final_published: false,
@@ -753,6 +763,7 @@ impl Server {
         let lim = controllers::Limits {
             joints: self.engine.model().joints.len(),
             bodies: self.engine.model().bodies.len(),
+            motored: &self.motored,
         };
         let idx = self.slots.iter().position(|s| s.id == input.controller_id);
         if let Some(i) = idx {
@@ -835,6 +846,17 @@ impl Server {
             }
             // Cannot fail: index in range, values checked finite.
             let _ = self.engine.set_joint_torque(j, Vector3::from(t));
+            if self.motored[j] {
+                let v = controllers::net_motor(&self.slots, j, self.scene_motor[j]);
+                if v.to_bits() != self.applied_motor[j].to_bits() {
+                    self.applied_motor[j] = v;
+                    if let Some(f) = self.files.as_mut() {
+                        f.logs.motor(k, j, v)?;
+                    }
+                }
+                // Cannot fail: a joint with a motor, a finite target.
+                let _ = self.engine.set_motor_speed(j, v);
+            }
         }
         for s in &self.slots {
             for b in &s.impulses {

@@ -42,6 +42,9 @@ pub fn replay(dir: &Path) -> Result<ReplayOutcome, String> {
             Op::Torque { joint, t, .. } => engine
                 .set_joint_torque(joint, Vector3::from(t))
                 .map_err(|e| format!("{}: {e}", path.display()))?,
+            Op::Motor { joint, speed, .. } => engine
+                .set_motor_speed(joint, speed)
+                .map_err(|e| format!("{}: {e}", path.display()))?,
             Op::Impulse { body, l, a, .. } => engine
                 .add_body_impulse(body, Vector3::from(l), Vector3::from(a))
                 .map_err(|e| format!("{}: {e}", path.display()))?,
