@@ -60,6 +60,8 @@ pub struct Panel {
     /// A force panel: its scale is chosen from its series when drawn
     /// (`settle`), also after two runs' series were put together.
     pub forces: bool,
+    /// A force panel's unit: N, or N m for torques.
+    pub unit: &'static str,
 }
 
 impl Panel {
@@ -70,6 +72,7 @@ impl Panel {
             counts: false,
             scale: Scale::Linear,
             forces: false,
+            unit: "N",
         }
     }
     fn counts(mut self) -> Panel {
@@ -574,6 +577,45 @@ fn force_series(run: &RunData, kind: &str, h: f64) -> Vec<Series> {
         .collect()
 }
 
+/// The joint forces figure's panels: the anchors' forces, then where a
+/// limit or motor pushed, their pushes (impulse / h): a hinge's a torque
+/// (N m), a slider's a force (N), each in its own panel (joints.csv
+/// says which joint is which; without it the pushes are left out).
+fn joint_force_panels(run: &RunData, h: f64) -> Vec<Panel> {
+    let mut panels = vec![force_panel("|f_b|", force_series(run, "joint", h))];
+    let kind_of = |name: &str| {
+        run.coordinates
+            .iter()
+            .find(|c| c.name == name)
+            .map(|c| c.kind.as_str())
+    };
+    for (kind, what, unit) in [
+        ("revolute", "hinges |tau|", "N m"),
+        ("prismatic", "sliders |f|", "N"),
+    ] {
+        let mut series: Vec<Series> = ["joint_limit", "joint_motor"]
+            .iter()
+            .flat_map(|k| {
+                force_series(run, k, h).into_iter().map(move |mut s| {
+                    s.name = format!("{} {}", s.name, &k["joint_".len()..]);
+                    s
+                })
+            })
+            .filter(|s| kind_of(s.name.split(' ').next().unwrap_or("")) == Some(kind))
+            .collect();
+        for (i, s) in series.iter_mut().enumerate() {
+            s.color = color(i);
+        }
+        if !series.is_empty() {
+            panels.push(Panel {
+                unit,
+                ..force_panel(what, series)
+            });
+        }
+    }
+    panels
+}
+
 /// A force panel of quantity `what` (its unit added when settled).
 fn force_panel(what: &str, series: Vec<Series>) -> Panel {
     Panel {
@@ -603,10 +645,10 @@ impl Panel {
         match (values.get(values.len() / 2), values.last()) {
             (Some(&typical), Some(&largest)) if largest > 100.0 * typical => {
                 let c = 10f64.powf(typical.log10().floor());
-                self.ylabel = format!("{what} (N, symlog, linear below {})", tick(c));
+                self.ylabel = format!("{what} ({}, symlog, linear below {})", self.unit, tick(c));
                 self.scale = Scale::Symlog { c };
             }
-            _ => self.ylabel = format!("{what} (N)"),
+            _ => self.ylabel = format!("{what} ({})", self.unit),
         }
         self
     }
@@ -667,6 +709,7 @@ impl Panel {
             counts,
             scale,
             forces,
+            unit,
         } = self;
         series
             .into_iter()
@@ -676,6 +719,7 @@ impl Panel {
                 counts,
                 scale,
                 forces,
+                unit,
             })
             .collect()
     }
@@ -869,8 +913,8 @@ pub fn specs(run: &RunData) -> Vec<Spec> {
         );
         put(
             "joint_forces",
-            "Joint force magnitude per joint (impulse / h)",
-            vec![force_panel("|f_b|", force_series(run, "joint", h))],
+            "Joint force magnitude per joint (impulse / h); below, limits' and motors' pushes",
+            joint_force_panels(run, h),
         );
     }
     put(
@@ -1060,6 +1104,58 @@ mod tests {
         assert!(panels
             .iter()
             .all(|p| p.series.iter().all(|s| s.points[0].1.abs() < 1e-12)));
+    }
+
+    /// A limit's and a motor's pushes are drawn as forces (impulse / h)
+    /// below the anchors' forces: a hinge's in N m, a slider's in N, each
+    /// in its own panel, named by joint and kind; without joints.csv (no
+    /// joint kinds) they are left out rather than drawn in a wrong unit.
+    #[test]
+    fn limits_and_motors_draw_their_pushes_by_unit() {
+        use super::super::data::JointCoordinate;
+        let h = 0.01;
+        let step_t: Vec<f64> = (1..=3).map(|k| k as f64 * h).collect();
+        let mut impulses = std::collections::BTreeMap::new();
+        let series = |v: [f64; 3]| vec![Some(v), None, Some(v)];
+        impulses.insert(("joint".into(), "elbow".into()), series([0.0, 0.0, 0.05]));
+        impulses.insert(
+            ("joint_limit".into(), "elbow".into()),
+            series([0.0, 0.03, 0.04]),
+        );
+        impulses.insert(
+            ("joint_motor".into(), "rail".into()),
+            series([0.02, 0.0, 0.0]),
+        );
+        let coordinate = |name: &str, kind: &str| JointCoordinate {
+            name: name.into(),
+            kind: kind.into(),
+            values: Vec::new(),
+        };
+        let mut run = RunData {
+            step_t,
+            impulses,
+            coordinates: vec![
+                coordinate("elbow", "revolute"),
+                coordinate("rail", "prismatic"),
+            ],
+            ..Default::default()
+        };
+        let settled: Vec<Panel> = joint_force_panels(&run, h)
+            .into_iter()
+            .map(Panel::settle)
+            .collect();
+        let labels: Vec<&str> = settled.iter().map(|p| p.ylabel.as_str()).collect();
+        assert_eq!(
+            labels,
+            ["|f_b| (N)", "hinges |tau| (N m)", "sliders |f| (N)"]
+        );
+        assert_eq!(settled[1].series[0].name, "elbow limit");
+        assert_eq!(settled[2].series[0].name, "rail motor");
+        let p = &settled[1].series[0].points;
+        assert!((p[0].1 - 5.0).abs() < 1e-12 && p[1].1.is_nan(), "{p:?}");
+        assert!((settled[2].series[0].points[2].1 - 2.0).abs() < 1e-12);
+        run.coordinates.clear();
+        assert_eq!(joint_force_panels(&run, h).len(), 1);
     }
 
     #[test]
