@@ -10,6 +10,7 @@
 //!
 //! The bytes on the wire are described in `docs/protocol.md`.
 
+pub mod arm;
 pub mod cli;
 pub mod pd;
 pub mod view;

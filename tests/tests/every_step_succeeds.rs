@@ -9,7 +9,7 @@ use cosim_server::engine::{Engine, LadderCounts, Model, Turning};
 use cosim_shared::{Scene, SolverChoice};
 use cosim_tests::shipped_scene;
 
-const SHIPPED: [&str; 9] = [
+const SHIPPED: [&str; 10] = [
     "reference.toml",
     "friction.toml",
     "frictionless.toml",
@@ -19,6 +19,7 @@ const SHIPPED: [&str; 9] = [
     "restitution.toml",
     "slider.toml",
     "limits.toml",
+    "arm.toml",
 ];
 
 /// Steps `steps` times; panics on a failed step or, with Lemke asked for,

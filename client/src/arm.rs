@@ -1,0 +1,57 @@
+//! A position controller for examples/scenes/arm.toml by its joints'
+//! velocity motors (protocol 4's motor targets): per step it reads the
+//! shoulder's and elbow's angles from the state frame and sets each motor's
+//! target rate to `k (q* - q)`, clipped to `MAX_RATE`. This is how a Rapier
+//! or ODE user drives a joint to a position with a velocity motor: while
+//! the motors stay within their effort bounds the rate is the target
+//! exactly, so each angle error decays by `1 - k h` a step, with no steady
+//! error under gravity (the motor carries the load). The examples crate's
+//! `arm_controller` runs it in a process of its own;
+//! examples/python/arm_controller.py is the same law in Python.
+
+use crate::{ClientError, Controller, InputFrame, StateFrame, WaitMode};
+use std::time::Duration;
+
+/// The arm's joints with motors: shoulder, elbow (arm.toml's order).
+pub const JOINTS: [usize; 2] = [0, 1];
+/// Per second: the angle error's decay rate within the motors' bounds.
+pub const GAIN: f64 = 5.0;
+/// The largest target rate (rad/s).
+pub const MAX_RATE: f64 = 2.0;
+
+/// The motor targets (rad/s) for the joint angles `target` (rad) at
+/// `frame`, and the angles read.
+pub fn rates(frame: &StateFrame, target: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+    let angles = JOINTS.map(|j| frame.joint_coordinates[j][0]);
+    let rate = |k: usize| (GAIN * (target[k] - angles[k])).clamp(-MAX_RATE, MAX_RATE);
+    ([rate(0), rate(1)], angles)
+}
+
+/// What a run did: steps answered and the last angles read (rad).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Outcome {
+    pub steps: u64,
+    pub angles: [f64; 2],
+}
+
+/// Joins server `name` and steers the arm to `target` (shoulder, elbow;
+/// rad) until the server shuts down.
+pub fn run(name: &str, target: [f64; 2], timeout: Duration) -> Result<Outcome, ClientError> {
+    let mut c = Controller::join(name, WaitMode::Block)?;
+    let mut out = Outcome::default();
+    loop {
+        let frame = match c.next_state(timeout) {
+            Ok(f) => f,
+            Err(ClientError::Shutdown) => return Ok(out),
+            Err(e) => return Err(e),
+        };
+        let (rates, angles) = rates(&frame, target);
+        out.angles = angles;
+        let mut input = InputFrame::default();
+        for (&j, v) in JOINTS.iter().zip(rates) {
+            input.push_motor(j as u32, v);
+        }
+        c.send(input)?;
+        out.steps += 1;
+    }
+}
