@@ -12,6 +12,9 @@
 //!   recordings draw them (`cosim-server run --mcap`);
 //! - `/tf` (`foxglove.FrameTransforms`): `world` to each body;
 //! - `/bodies/NAME` (`cosim.BodyState`);
+//! - `/joints/NAME` (`cosim.JointCoordinate`): a hinge's angle or a
+//!   slider's offset and its rate, from the frame (protocol 3), as the
+//!   recordings and joints.csv have them;
 //! - `/solver` (`cosim.StepReport`): step, LCP size, residual, contacts,
 //!   controllers, solver status;
 //!
@@ -23,6 +26,7 @@ use cosim_foxglove::draw::{self, Arrow, Drawing, Other, Pose};
 use cosim_foxglove::live::{Event, Live};
 use cosim_foxglove::{schema, Channel};
 use cosim_shared::wire::{BodyFrame, CONTACT_PLANE};
+use cosim_shared::JointKind;
 use nalgebra::Vector3;
 use serde_json::{json, Value};
 use std::net::SocketAddr;
@@ -52,8 +56,14 @@ pub struct ViewStats {
 const SCENE: u32 = 1;
 const TF: u32 = 2;
 const SOLVER: u32 = 3;
-/// `/bodies/NAME` of body `i` is channel `BODIES + i`.
+/// `/bodies/NAME` of body `i` is channel `BODIES + i`; `/joints/NAME` of
+/// joint `j` (hinges and sliders only) is `BODIES + bodies + j`.
 const BODIES: u32 = 16;
+
+/// The channel of joint `j`'s coordinate in a scene of `bodies` bodies.
+fn joint_channel(bodies: usize, j: usize) -> u32 {
+    BODIES + (bodies + j) as u32
+}
 
 /// Serves server `name`'s state to Foxglove until the server stops, the
 /// time is up or the process is interrupted. `listening` is called once
@@ -89,6 +99,16 @@ pub fn view(
             topic: format!("/bodies/{b}"),
             schema: schema::body_state(),
         });
+    }
+    let bodies = drawing.bodies().len();
+    for (j, joint) in scene.joints.iter().enumerate() {
+        if matches!(joint.kind, JointKind::Revolute | JointKind::Prismatic) {
+            channels.push(Channel {
+                id: joint_channel(bodies, j),
+                topic: format!("/joints/{}", joint.name),
+                schema: schema::joint_coordinate(),
+            });
+        }
     }
     let mut live = Live::bind(opts.listen.as_str(), &format!("cosim {name}"), channels)?;
     let monitor = Monitor::polling(name)?;
@@ -173,6 +193,15 @@ fn send(live: &mut Live, drawing: &Drawing, f: &StateFrame) {
         let channel = BODIES + i as u32;
         if live.subscribed(channel) {
             let msg = draw::body_state(&body_row(b));
+            live.publish(channel, ns, msg.to_string().as_bytes());
+        }
+    }
+    // A spherical or fixed joint has no channel, so never a subscriber.
+    let bodies = f.bodies().len();
+    for (j, [x, v]) in f.joint_coordinates.iter().enumerate() {
+        let channel = joint_channel(bodies, j);
+        if live.subscribed(channel) {
+            let msg = draw::joint_coordinate(*x, *v);
             live.publish(channel, ns, msg.to_string().as_bytes());
         }
     }

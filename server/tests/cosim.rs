@@ -1999,19 +1999,16 @@ fn fox(m: tungstenite::Message) -> Option<Fox> {
     }
 }
 
-#[test]
-fn the_live_view_serves_foxglove_the_servers_states() {
-    use tungstenite::client::IntoClientRequest;
-    // 1.5 s of real time: at 200 frames a second the view has 300 to
-    // send, and the check below asks for 10 (400 steps once gave fewer
-    // with the whole test suite loading both cores).
-    let (server, dir, name) = serve_test(
-        "view",
-        &["--controllers", "1", "--realtime", "1", "--steps", "1500"],
-    );
-    // The view as `cosim view --listen 127.0.0.1:0 --rate 200` runs it.
+/// The view of server `name` as `cosim view --listen 127.0.0.1:0 --rate
+/// 200` runs it, in a thread, and the address it listens on.
+fn start_view(
+    name: &str,
+) -> (
+    std::thread::JoinHandle<Result<cosim_client::view::ViewStats, String>>,
+    std::net::SocketAddr,
+) {
     let (tx, rx) = std::sync::mpsc::channel();
-    let vname = name.clone();
+    let vname = name.to_string();
     let view = std::thread::spawn(move || {
         let opts = cosim_client::view::ViewOptions {
             listen: "127.0.0.1:0".into(),
@@ -2024,6 +2021,20 @@ fn the_live_view_serves_foxglove_the_servers_states() {
     let addr = rx
         .recv_timeout(Duration::from_secs(20))
         .expect("the view listens");
+    (view, addr)
+}
+
+#[test]
+fn the_live_view_serves_foxglove_the_servers_states() {
+    use tungstenite::client::IntoClientRequest;
+    // 1.5 s of real time: at 200 frames a second the view has 300 to
+    // send, and the check below asks for 10 (400 steps once gave fewer
+    // with the whole test suite loading both cores).
+    let (server, dir, name) = serve_test(
+        "view",
+        &["--controllers", "1", "--realtime", "1", "--steps", "1500"],
+    );
+    let (view, addr) = start_view(&name);
     let url = format!("ws://{addr}");
     // A WebSocket client that does not ask for the protocol is refused.
     let refused = tungstenite::connect(url.as_str());
@@ -2515,4 +2526,75 @@ fn a_two_link_arm_reaches_its_target_under_a_motor_controller_rust_and_python() 
         printed_after(&text, "elbow "),
     );
     assert!((s - 0.6).abs() < 1e-5 && (e + 1.0).abs() < 1e-5, "{text}");
+}
+
+/// The live view serves each hinge's and slider's coordinate on
+/// `/joints/NAME` (`cosim.JointCoordinate`), as recordings do: limits.toml
+/// (two hinges swinging onto their limits, a slider driven by its motor),
+/// served alone in real time; every message equals the server's
+/// joints.csv row at its time's step to the last bit JSON's parser keeps.
+#[test]
+fn the_live_view_serves_the_joints_coordinates() {
+    use tungstenite::client::IntoClientRequest;
+    let (server, dir, name) = serve_test(
+        "view-joints",
+        &[LIMITS, "--realtime", "1", "--steps", "600"],
+    );
+    let (view, addr) = start_view(&name);
+    let mut req = format!("ws://{addr}").into_client_request().unwrap();
+    req.headers_mut().insert(
+        "Sec-WebSocket-Protocol",
+        "foxglove.websocket.v1".parse().unwrap(),
+    );
+    let (mut ws, _) = tungstenite::connect(req).expect("connect as Foxglove does");
+    let mut joints = std::collections::BTreeMap::new();
+    let mut samples = Vec::new();
+    while let Ok(m) = ws.read() {
+        match fox(m) {
+            Some(Fox::Json(j)) if j["op"] == "advertise" => {
+                for c in j["channels"].as_array().unwrap() {
+                    let topic = c["topic"].as_str().unwrap();
+                    if let Some(joint) = topic.strip_prefix("/joints/") {
+                        assert_eq!(c["schemaName"], "cosim.JointCoordinate");
+                        let id = c["id"].as_u64().unwrap();
+                        joints.insert(id, joint.to_string());
+                        let sub = serde_json::json!({ "op": "subscribe",
+                            "subscriptions": [{ "id": id, "channelId": id }] });
+                        ws.send(tungstenite::Message::text(sub.to_string()))
+                            .unwrap();
+                    }
+                }
+            }
+            Some(Fox::Data(sub, t, msg)) => samples.push((joints[&u64::from(sub)].clone(), t, msg)),
+            _ => {}
+        }
+    }
+    assert!(server.finish().0.success());
+    view.join().unwrap().expect("the view ends with the server");
+    let names: Vec<&str> = joints.values().map(|s| s.as_str()).collect();
+    assert_eq!(names, ["shoulder", "elbow", "rail"]);
+    let csv = std::fs::read_to_string(dir.path().join("joints.csv")).unwrap();
+    let rows: std::collections::BTreeMap<(u64, String), [f64; 2]> = csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            let v = |k: usize| c[k].parse::<f64>().unwrap();
+            ((c[0].parse().unwrap(), c[2].to_string()), [v(4), v(5)])
+        })
+        .collect();
+    let drawn: std::collections::BTreeSet<&str> = samples.iter().map(|s| s.0.as_str()).collect();
+    assert_eq!(drawn.len(), 3, "every joint drawn");
+    assert!(samples.len() >= 20, "{} samples", samples.len());
+    for (joint, t, msg) in &samples {
+        let step = (*t as f64 * 1e-9 / 1e-3).round() as u64;
+        let want = rows[&(step, joint.clone())];
+        let got = [
+            msg["position"].as_f64().unwrap(),
+            msg["rate"].as_f64().unwrap(),
+        ];
+        // serde_json's parser may round the last bit of a number.
+        let same = (0..2).all(|k| (got[k] - want[k]).abs() <= 1e-15 * want[k].abs());
+        assert!(same, "{joint} at step {step}: {got:?} against {want:?}");
+    }
 }
