@@ -241,7 +241,7 @@ fn warm_start(m: &mut Mlcp, state: &State, step: Step) {
     m.lambda[..m.nb].copy_from_slice(&state.warm_joint[..m.nb]);
     // The motors' impulses follow the joints' in the state, and their
     // rows the friction rows here.
-    let motors = m.nb + m.nc + m.nf * m.nd;
+    let motors = m.motor_rows();
     m.lambda[motors..motors + m.nm].copy_from_slice(&state.warm_joint[m.nb..]);
     for (i, &ci) in m.lcp_contacts.iter().enumerate() {
         if m.held.get(i) != Some(&true) {

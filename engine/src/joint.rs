@@ -45,6 +45,16 @@ fn orientation(att: Attachment, state: &State) -> UnitQuaternion<f64> {
     }
 }
 
+/// A hinge's or slider's axis in the world, as A holds it (`None` for
+/// spherical and fixed joints): the axis of its coordinate, limits and
+/// motor.
+pub fn axis(joint: &Joint, state: &State) -> Option<Vector3<f64>> {
+    match (joint.slide, joint.turning) {
+        (Some(u), _) | (None, Turning::Axis { a: u, .. }) => Some(orientation(joint.a, state) * u),
+        _ => None,
+    }
+}
+
 /// A side's body (none for the world).
 pub fn body(att: Attachment) -> Option<usize> {
     match att {

@@ -13,15 +13,10 @@
 //! every shape contact's (`Model::limit_id`), so the list stays in
 //! ascending id.
 //!
-//! The rows, with `u` the axis in the world (A's) and `x` the coordinate
-//! (`joint::coordinate`, whose rate they reproduce exactly):
-//! - Hinge: `x' = u . (w_B - w_A)`, the turning row about `-u`
-//!   (`Row::turning(p)` reads `p . (w_A - w_B)`); the upper limit's
-//!   about `+u`.
-//! - Slider: `x' = -(u . (v_A + w_A x (p_B - x_A)) - u . v_pB)`, the row
-//!   along `-u` with A's lever arm at B's anchor, as the slider's own rows
-//!   (joint.rs): `d/dt (u . d) = u . (v_pB - v_pA) + (w_A x u) . d` with
-//!   `d = p_B - p_A`, and `(w_A x u) . d = -u . (w_A x d)`.
+//! The lower limit's row is the coordinate's rate row (`motor::rate_row`,
+//! derived there: a turning row about `-u` for a hinge, a row along `-u`
+//! with A's lever arm at B's anchor for a slider), written as a contact's
+//! geometry; the upper limit's is its negative.
 //!
 //! A joint of a body to the world: the contact's first side must be a
 //! body, so B takes it with the row negated (`Row::along(dir, None, B)`
@@ -29,31 +24,24 @@
 
 use crate::collision::{Counterpart, Geometry};
 use crate::contact::{Contact, Limit};
-use crate::joint::coordinate;
+use crate::joint::{axis, coordinate};
 use crate::mlcp::anchor;
-use crate::model::{Attachment, Model, Turning};
+use crate::model::Model;
 use crate::rows::Row;
 use crate::state::State;
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 
 /// Appends a contact for each side of each limited joint, in joint order
 /// (ascending id).
 pub fn limits(model: &Model, state: &State, out: &mut Vec<Contact>) {
     for (j, joint) in model.joints.iter().enumerate() {
-        let (Some(lim), Some((x, _))) = (joint.limits, coordinate(joint, state)) else {
+        // `coordinate` and `axis` give none for spherical and fixed joints.
+        let (Some(lim), Some((x, _)), Some(u)) =
+            (joint.limits, coordinate(joint, state), axis(joint, state))
+        else {
             continue;
         };
-        let qa = match joint.a {
-            Attachment::World => UnitQuaternion::identity(),
-            Attachment::Body(i) => state.bodies[i].q,
-        };
-        let (angular, axis) = match (joint.slide, joint.turning) {
-            (Some(axis), _) => (false, axis),
-            (None, Turning::Axis { a, .. }) => (true, a),
-            // `coordinate` gives none for the other joints.
-            _ => continue,
-        };
-        let u = qa * axis;
+        let angular = joint.slide.is_none();
         let (pa, ra) = anchor(joint.a, &joint.local_a, state);
         let (pb, rb) = anchor(joint.b, &joint.local_b, state);
         // A's lever arm at B's anchor (the slider's rows'); unused by a

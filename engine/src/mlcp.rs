@@ -283,7 +283,7 @@ pub struct Mlcp {
     pub motor_row: Vec<usize>,
     pub motor_speed: Vec<f64>,
     pub motor_cap: Vec<f64>,
-    /// Each motor's axis in the world at the step's start (`motor::axis`).
+    /// Each motor's axis in the world at the step's start (`joint::axis`).
     pub motor_axis: Vec<Vector3<f64>>,
     /// Friction block `f` belongs to normal row `friction_of[f]`, with
     /// coefficient `mu[f]`.
@@ -386,6 +386,13 @@ impl Mlcp {
     /// `n = nc + nf (n_d + 1) + 3 nm`.
     pub fn lcp_size(&self) -> usize {
         self.contact_rows() + self.nf + self.nm
+    }
+
+    /// Where the motors' rows start in [`Mlcp::rows`] once the friction
+    /// rows are added (the iterative solver's problem: joint, normal,
+    /// friction rows, then one per motor).
+    pub fn motor_rows(&self) -> usize {
+        self.nb + self.nc + self.nf * self.nd
     }
 
     /// Where motor `k`'s pair `(p+, p-)` starts in the LCP's unknowns.
@@ -543,7 +550,7 @@ impl Mlcp {
             };
             self.basis.push(row);
             self.motor_axis
-                .push(crate::motor::axis(joint, state).unwrap_or_else(Vector3::zeros));
+                .push(crate::joint::axis(joint, state).unwrap_or_else(Vector3::zeros));
             self.motor_row.push(model.joint_start[j]);
             self.motor_cap.push(motor.max_effort * p.h);
         }
@@ -760,7 +767,7 @@ impl Mlcp {
         // the relaxed problem keeps it (its bounded rows leave the
         // homogeneous problem's `x = 0` on the pairs, see `Offsets`).
         let (rows, nf) = (self.contact_rows(), self.nf);
-        let motor_rows = nb + self.nc + nf * self.nd;
+        let motor_rows = self.motor_rows();
         for k in 0..self.nm {
             let (at, v) = (self.motor_pair(k), self.motor_speed[k]);
             self.lcp_q[at] -= v;
@@ -860,7 +867,7 @@ impl Mlcp {
         // slack column, `-E^T` the slack row, whose constant `F h` is in
         // `q` (form_rhs).
         for k in 0..self.nm {
-            let (at, s) = (self.nc + self.nf * self.nd + 2 * k, m + self.nf + k);
+            let (at, s) = (self.motor_pair(k), m + self.nf + k);
             for row in [at, at + 1] {
                 self.lcp_m[row * n + s] = 1.0;
                 self.lcp_m[s * n + row] = -1.0;

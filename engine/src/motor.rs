@@ -16,24 +16,12 @@
 //! in the LCP's `q`, so the matrix stays the one `prepare` made before
 //! the inputs, whatever speed a controller sets.
 
-use crate::joint::body;
+use crate::joint::{axis, body};
 use crate::mlcp::anchor;
-use crate::model::{Attachment, Joint, Turning};
+use crate::model::Joint;
 use crate::rows::Row;
 use crate::state::State;
-use nalgebra::{UnitQuaternion, Vector3};
-
-/// The joint's axis in the world (as A holds it), for a hinge or slider.
-pub fn axis(joint: &Joint, state: &State) -> Option<Vector3<f64>> {
-    let qa = match joint.a {
-        Attachment::World => UnitQuaternion::identity(),
-        Attachment::Body(i) => state.bodies[i].q,
-    };
-    match (joint.slide, joint.turning) {
-        (Some(u), _) | (None, Turning::Axis { a: u, .. }) => Some(qa * u),
-        _ => None,
-    }
-}
+use nalgebra::Vector3;
 
 /// The row whose velocity is the coordinate's rate `x'`
 /// (`joint::coordinate`), for a hinge or slider:

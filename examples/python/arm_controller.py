@@ -29,11 +29,7 @@ def main() -> int:
     target = (args.shoulder, args.elbow)
     angles, sent = [float("nan")] * 2, 0
     with cosim.Controller(args.name) as c:
-        while True:
-            try:
-                state = c.next_state()
-            except cosim.Shutdown:
-                break
+        for state in c.states():  # until the server shuts down
             angles = [float(state.joint_positions[j]) for j in (0, 1)]
             rates = {
                 j: max(-MAX_RATE, min(MAX_RATE, GAIN * (q - angles[j])))

@@ -24,11 +24,7 @@ def main() -> int:
 
     rate, sent = float("nan"), 0
     with cosim.Controller(args.name) as c:
-        while True:
-            try:
-                state = c.next_state()
-            except cosim.Shutdown:
-                break
+        for state in c.states():  # until the server shuts down
             rate = state.joint_rates[RAIL]
             # Held by the server until changed: sent once would do; sent
             # every step it changes nothing.

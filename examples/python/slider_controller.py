@@ -41,11 +41,7 @@ def main() -> int:
 
     offset, sent = float("nan"), 0
     with cosim.Controller(args.name) as c:
-        while True:
-            try:
-                state = c.next_state()
-            except cosim.Shutdown:
-                break
+        for state in c.states():  # until the server shuts down
             f, offset = force(state, args.target)
             c.send(torques={RAIL: f})
             sent += 1
