@@ -911,11 +911,14 @@ pub fn specs(run: &RunData) -> Vec<Spec> {
             "Friction force magnitude per contact (impulse / h)",
             vec![force_panel("|f_t|", force_series(run, "friction", h))],
         );
-        put(
-            "joint_forces",
-            "Joint force magnitude per joint (impulse / h); below, limits' and motors' pushes",
-            joint_force_panels(run, h),
-        );
+        let panels = joint_force_panels(run, h);
+        // The title names the pushes' panels only where there are some.
+        let title = if panels.len() > 1 {
+            "Joint force magnitude per joint (impulse / h); below, limits' and motors' pushes"
+        } else {
+            "Joint force magnitude per joint (impulse / h)"
+        };
+        put("joint_forces", title, panels);
     }
     put(
         "errors",
