@@ -357,7 +357,9 @@ struct Recorder {
     scene: cosim_shared::Scene,
     /// `--mcap`: `recording.mcap` beside the CSV files, written as the
     /// frames come.
-    mcap: Option<(Recording, Drawing)>,
+    mcap: Option<(Recording, Drawing, view::ContactPoints)>,
+    /// The scene's contact ids per pair (`Scene::contact_features`).
+    features: usize,
     states: std::io::BufWriter<std::fs::File>,
     joints: std::io::BufWriter<std::fs::File>,
     impulses: std::io::BufWriter<std::fs::File>,
@@ -385,9 +387,11 @@ impl Recorder {
                     Recording::create(&dir.join("recording.mcap"))
                         .map_err(std::io::Error::other)?,
                     Drawing::new(&scene),
+                    view::ContactPoints::new(&scene),
                 )),
                 false => None,
             },
+            features: scene.contact_features(),
             scene,
             last_step: None,
         })
@@ -396,12 +400,12 @@ impl Recorder {
     /// The frame's state on the recording's channels, as `run --mcap`
     /// writes them (forces go with the impulses, in `frame`).
     fn mcap_state(&mut self, f: &StateFrame) -> Result<(), RecordError> {
-        let Some((rec, drawing)) = self.mcap.as_mut() else {
+        let Some((rec, drawing, points)) = self.mcap.as_mut() else {
             return Ok(());
         };
         let t = f.sim_time;
         let poses = view::poses(f);
-        let msg = view::scene_message(drawing, f, &poses);
+        let msg = view::scene_message(drawing, points, f, &poses);
         rec.put("/scene", schema::scene_update, t, &msg)?;
         rec.put(
             "/tf",
@@ -438,7 +442,7 @@ impl Recorder {
                 "{},{t},{},{kind},{},{},,",
                 f.step, desc.name, c[0], c[1]
             )?;
-            if let Some((rec, _)) = self.mcap.as_mut() {
+            if let Some((rec, ..)) = self.mcap.as_mut() {
                 let msg = draw::joint_coordinate(c[0], c[1]);
                 rec.put(
                     &format!("/joints/{}", desc.name),
@@ -461,7 +465,7 @@ impl Recorder {
         h: f64,
         p: [f64; 3],
     ) -> Result<(), RecordError> {
-        let Some((rec, _)) = self.mcap.as_mut() else {
+        let Some((rec, ..)) = self.mcap.as_mut() else {
             return Ok(());
         };
         let f = nalgebra::Vector3::from(p) / h;
@@ -472,7 +476,7 @@ impl Recorder {
     /// Closes the recording (its summary is written last).
     fn finish(mut self) -> std::io::Result<()> {
         self.flush()?;
-        if let Some((rec, _)) = self.mcap.take() {
+        if let Some((rec, ..)) = self.mcap.take() {
             rec.finish().map_err(std::io::Error::other)?;
         }
         Ok(())
@@ -534,14 +538,15 @@ impl Recorder {
                 self.scene.bodies.get(c.index_b as usize).map(|b| &b.name)
             }
             .map_or("?", |s| s.as_str());
+            let label = cosim_shared::contact_label(a, b, c.id as usize % self.features);
             for (kind, p) in [("normal", c.normal), ("friction", c.friction)] {
                 if p.iter().any(|x| *x != 0.0) {
                     writeln!(
                         self.impulses,
-                        "{},{t},{kind},{a}/{b},{a},{b},{},{},{}",
+                        "{},{t},{kind},{label},{a},{b},{},{},{}",
                         f.step, p[0], p[1], p[2]
                     )?;
-                    forces.push((kind, format!("{a}/{b}"), p));
+                    forces.push((kind, label.clone(), p));
                 }
             }
         }

@@ -22,10 +22,10 @@
 //! built only for channels someone subscribes to.
 
 use crate::{Connection, Monitor, StateFrame, STATUS_SHUTDOWN};
-use cosim_foxglove::draw::{self, Arrow, Drawing, Other, Pose};
+use cosim_foxglove::draw::{self, Arrow, Drawing, Pose};
 use cosim_foxglove::live::{Event, Live};
 use cosim_foxglove::{schema, Channel};
-use cosim_shared::wire::{BodyFrame, CONTACT_PLANE};
+use cosim_shared::wire::BodyFrame;
 use cosim_shared::JointKind;
 use nalgebra::Vector3;
 use serde_json::{json, Value};
@@ -76,6 +76,7 @@ pub fn view(
     let conn = Connection::connect(name)?;
     let scene = cosim_shared::Scene::parse(&conn.scene_toml()?, "<server scene>")?;
     let drawing = Drawing::new(&scene);
+    let mut points = ContactPoints::new(&scene);
     let mut channels = vec![
         Channel {
             id: SCENE,
@@ -131,7 +132,7 @@ pub fn view(
             if f.sequence != last_sequence {
                 last_sequence = f.sequence;
                 stats.frames += 1;
-                send(&mut live, &drawing, &f);
+                send(&mut live, &drawing, &mut points, &f);
                 if f.status & STATUS_SHUTDOWN != 0 {
                     break;
                 }
@@ -173,13 +174,13 @@ pub(crate) const SOLVER_FIELDS: [&str; 7] = [
 ];
 
 /// One frame to the channels someone subscribes to.
-fn send(live: &mut Live, drawing: &Drawing, f: &StateFrame) {
+fn send(live: &mut Live, drawing: &Drawing, points: &mut ContactPoints, f: &StateFrame) {
     let t = f.sim_time;
     let ns = draw::nanos(t);
     live.time(ns);
     let poses = poses(f);
     if live.subscribed(SCENE) {
-        let msg = scene_message(drawing, f, &poses);
+        let msg = scene_message(drawing, points, f, &poses);
         live.publish(SCENE, ns, msg.to_string().as_bytes());
     }
     if live.subscribed(TF) {
@@ -234,23 +235,50 @@ pub(crate) fn solver_message(f: &StateFrame) -> Value {
     })
 }
 
+/// Where a frame's contacts touch: the engine's collision recomputed from
+/// the frame's poses (a frame carries each contact's id and impulses, not
+/// its point).
+pub(crate) struct ContactPoints {
+    model: cosim_engine::Model,
+    state: cosim_engine::State,
+}
+
+impl ContactPoints {
+    pub(crate) fn new(scene: &cosim_shared::Scene) -> ContactPoints {
+        let model = cosim_engine::Model::from_scene(scene);
+        let state = cosim_engine::State::initial(&model);
+        ContactPoints { model, state }
+    }
+
+    /// Takes the frame's poses; the points below are theirs.
+    fn pose(&mut self, poses: &[Pose]) {
+        for (b, p) in self.state.bodies.iter_mut().zip(poses) {
+            b.x = p.position;
+            b.q = p.orientation;
+        }
+    }
+
+    fn point(&self, id: usize) -> Option<Vector3<f64>> {
+        cosim_engine::collision::contact_point(&self.model, &self.state, id)
+    }
+}
+
 /// `/scene`: the frame drawn, with the last step's normal contact forces
 /// (impulse over h) as arrows at their points.
-pub(crate) fn scene_message(drawing: &Drawing, f: &StateFrame, poses: &[Pose]) -> Value {
+pub(crate) fn scene_message(
+    drawing: &Drawing,
+    points: &mut ContactPoints,
+    f: &StateFrame,
+    poses: &[Pose],
+) -> Value {
     let h = if f.dt > 0.0 { f.dt } else { 1.0 };
+    points.pose(poses);
     let arrows: Vec<Arrow> = f
         .contacts()
         .iter()
         .filter_map(|c| {
-            let a = c.body_a as usize;
-            let centre = poses.get(a)?.position;
-            let other = if c.kind_b == CONTACT_PLANE {
-                Other::Plane(drawing.plane_normal(c.index_b as usize)?)
-            } else {
-                Other::Body(poses.get(c.index_b as usize)?.position)
-            };
             Some(Arrow {
-                at: draw::contact_point(centre, drawing.radius(a)?, other),
+                at: points.point(c.id as usize)?,
                 force: Vector3::from(c.normal) / h,
             })
         })

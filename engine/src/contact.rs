@@ -103,7 +103,7 @@ pub fn perpendicular(n: &Vector3<f64>) -> Vector3<f64> {
 pub fn build(model: &Model, state: &State, geoms: &[Geometry], out: &mut Vec<Contact>) {
     out.clear();
     for g in geoms {
-        let id = model.contact_id(g.a, g.b);
+        let id = model.contact_id(g.a, g.b, g.feature);
         let a = &model.bodies[g.a];
         let (mu_b, e_b) = match g.b {
             Counterpart::Plane(p) => (model.planes[p].friction, model.planes[p].restitution),

@@ -220,10 +220,9 @@ impl Workspace {
         self.reach.clear();
         let g = p.gravity.norm();
         self.reach.extend(
-            state
-                .bodies
-                .iter()
-                .map(|b| p.h * (b.v.norm() + 2.0 * p.h * g)),
+            state.bodies.iter().zip(&model.bodies).map(|(b, m)| {
+                p.h * (b.v.norm() + b.w.norm() * m.shape.spin_reach() + 2.0 * p.h * g)
+            }),
         );
         self.detect(model, state);
         applied::inverse_masses(model, state, &mut self.minv);
@@ -266,14 +265,18 @@ impl Workspace {
             return false;
         }
         let mut grown = false;
-        let linear = |nu: &[f64], i: usize| Vector3::new(nu[6 * i], nu[6 * i + 1], nu[6 * i + 2]);
+        let at = |nu: &[f64], k: usize| Vector3::new(nu[k], nu[k + 1], nu[k + 2]).norm();
         for (i, r) in self.reach.iter_mut().enumerate() {
+            // A box's or capsule's surface moves with its spin too
+            // (`Shape::spin_reach`; none for a sphere).
+            let spin = model.bodies[i].shape.spin_reach();
+            let b = &state.bodies[i];
             let speed = match speeds {
-                Speeds::Free => state.bodies[i]
-                    .v
-                    .norm()
-                    .max(linear(&self.nu_free, i).norm()),
-                Speeds::New => linear(&self.nu, i).norm(),
+                Speeds::Free => {
+                    b.v.norm().max(at(&self.nu_free, 6 * i))
+                        + b.w.norm().max(at(&self.nu_free, 6 * i + 3)) * spin
+                }
+                Speeds::New => at(&self.nu, 6 * i) + at(&self.nu, 6 * i + 3) * spin,
             };
             let need = p.h * speed;
             if need > *r {
@@ -315,7 +318,7 @@ impl Workspace {
             // would be taken for the new one.
             self.mlcp.invalidate();
         }
-        prune::select(&mut self.contacts, state, &self.nu_free, &model.params);
+        prune::select(&mut self.contacts, model, state, &self.nu_free);
     }
 }
 
@@ -859,7 +862,7 @@ impl Engine {
                 return Ok(());
             }
             canonical = true;
-            if !prune::keep_active(&mut ws.contacts, &ws.mlcp.lcp_contacts, &ws.mlcp.z) {
+            if !prune::keep_active(&mut ws.contacts, &ws.mlcp, &ws.nu) {
                 return Ok(());
             }
         }

@@ -66,6 +66,7 @@ pub fn limits(model: &Model, state: &State, out: &mut Vec<Contact>) {
                 geom: Geometry {
                     a: first,
                     b: other,
+                    feature: 0,
                     gap,
                     normal,
                     point: pb,

@@ -5,19 +5,117 @@ use crate::collision::Counterpart;
 use cosim_shared::{FrictionCone, Scene, SolverChoice};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
-/// A body's shape. Another shape is a new variant, an inertia function below
-/// and a file per shape pair under `collision/`.
+/// A body's shape in its own frame, centred on the centre of mass.
+/// Another shape is a new variant, an inertia below and a file per shape
+/// pair under `collision/`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Shape {
-    Sphere { radius: f64 },
+    Sphere {
+        radius: f64,
+    },
+    /// The points within `radius` of the segment from `-half_length` to
+    /// `half_length` along the body's z axis.
+    Capsule {
+        radius: f64,
+        half_length: f64,
+    },
+    /// Half its edge lengths along the body's axes.
+    Box {
+        half: Vector3<f64>,
+    },
 }
 
 impl Shape {
-    /// Body-frame inertia about the centre of mass.
+    pub fn from_desc(d: cosim_shared::ShapeDesc) -> Shape {
+        use cosim_shared::ShapeDesc as D;
+        match d {
+            D::Sphere { radius } => Shape::Sphere { radius },
+            D::Capsule {
+                radius,
+                half_length,
+            } => Shape::Capsule {
+                radius,
+                half_length,
+            },
+            D::Box { half_extents: h } => Shape::Box {
+                half: Vector3::new(h[0], h[1], h[2]),
+            },
+        }
+    }
+
+    /// Body-frame inertia about the centre of mass of a solid of uniform
+    /// density and mass `mass`.
     pub fn inertia(&self, mass: f64) -> Matrix3<f64> {
         match *self {
             // Solid sphere: J = 2/5 m R^2 I.
             Shape::Sphere { radius } => Matrix3::identity() * (0.4 * mass * radius * radius),
+            // Cuboid of edges 2a, 2b, 2c: J_x = m (b^2 + c^2) / 3, ...
+            Shape::Box { half: h } => {
+                let (x, y, z) = (h.x * h.x, h.y * h.y, h.z * h.z);
+                Matrix3::from_diagonal(&Vector3::new(y + z, x + z, x + y)) * (mass / 3.0)
+            }
+            // A cylinder of radius r and length 2l and two hemispheres,
+            // masses in proportion to their volumes (2 pi r^2 l and
+            // 4/3 pi r^3). About the axis: m_c r^2 / 2 + m_s 2 r^2 / 5.
+            // Across it: the cylinder's m_c (r^2 / 4 + l^2 / 3); each
+            // hemisphere (m_s / 2) has 2 r^2 / 5 about its own flat face's
+            // centre, its centre of mass 3 r / 8 beyond that face, so by
+            // the parallel axes theorem (twice: to its centre of mass,
+            // then to ours at distance l + 3 r / 8) the pair adds
+            // m_s (2 r^2 / 5 + l^2 + 3 l r / 4).
+            Shape::Capsule {
+                radius: r,
+                half_length: l,
+            } => {
+                // Volumes over pi.
+                let (vc, vs) = (2.0 * r * r * l, 4.0 / 3.0 * r * r * r);
+                let (mc, ms) = (mass * vc / (vc + vs), mass * vs / (vc + vs));
+                let axial = mc * r * r / 2.0 + ms * 0.4 * r * r;
+                let across =
+                    mc * (r * r / 4.0 + l * l / 3.0) + ms * (0.4 * r * r + l * l + 0.75 * l * r);
+                Matrix3::from_diagonal(&Vector3::new(across, across, axial))
+            }
+        }
+    }
+
+    /// How far the shape reaches from its centre along the unit world
+    /// direction `dir` when turned by `q` (its support function): a
+    /// body's lowest point above a plane is its centre's height less its
+    /// extent along the plane's normal.
+    pub fn extent(&self, q: &UnitQuaternion<f64>, dir: &Vector3<f64>) -> f64 {
+        let d = q.inverse_transform_vector(dir);
+        match *self {
+            Shape::Sphere { radius } => radius,
+            Shape::Capsule {
+                radius,
+                half_length,
+            } => radius + half_length * d.z.abs(),
+            Shape::Box { half } => half.dot(&d.abs()),
+        }
+    }
+
+    /// The lever (m) that turns the body's angular speed into its
+    /// surface's speed in the bounds of the broad phase and the pruning
+    /// (`|v| + |w| spin_reach`): none for a sphere, whose gaps depend on
+    /// its centre alone; the bounding radius for the others, whose
+    /// vertices and ends sweep as they turn.
+    pub fn spin_reach(&self) -> f64 {
+        match self {
+            Shape::Sphere { .. } => 0.0,
+            _ => self.bounding_radius(),
+        }
+    }
+
+    /// The radius of the smallest sphere about the centre that holds the
+    /// shape: the broad phase's bound.
+    pub fn bounding_radius(&self) -> f64 {
+        match *self {
+            Shape::Sphere { radius } => radius,
+            Shape::Capsule {
+                radius,
+                half_length,
+            } => radius + half_length,
+            Shape::Box { half } => half.norm(),
         }
     }
 }
@@ -28,8 +126,8 @@ pub struct Body {
     pub shape: Shape,
     pub mass: f64,
     pub inv_mass: f64,
-    /// Body-frame inertia and its inverse (diagonal for a sphere, so the
-    /// world-frame inverse is the same matrix).
+    /// Body-frame inertia and its inverse (diagonal: the shapes' axes are
+    /// the body's; `applied::inverse_masses` turns them into the world).
     pub inertia: Matrix3<f64>,
     pub inv_inertia: Matrix3<f64>,
     pub friction: f64,
@@ -339,7 +437,13 @@ pub struct Model {
     pub motors: Vec<usize>,
     pub params: Params,
     pub initial: Vec<InitialBody>,
+    /// Contact ids per pair of shapes: 1 in a scene of spheres (a pair
+    /// touches at one point), [`MAX_FEATURES`] where a box or capsule may
+    /// touch at several (`collision/`).
+    pub features: usize,
 }
+
+pub use cosim_shared::MAX_FEATURES;
 
 /// How contact coefficients combine (Box2D's rule): friction is the geometric
 /// mean, so a frictionless side makes the contact frictionless; restitution
@@ -360,7 +464,7 @@ impl Model {
             .bodies
             .iter()
             .map(|b| {
-                let shape = Shape::Sphere { radius: b.radius };
+                let shape = Shape::from_desc(b.shape());
                 let inertia = shape.inertia(b.mass);
                 Body {
                     name: b.name.clone(),
@@ -541,16 +645,20 @@ impl Model {
                 }),
             },
             initial,
+            features: scene.contact_features(),
         }
     }
 
-    /// The canonical index of the potential contact of body `a` with `b`:
-    /// its place in the full enumeration (sphere-plane body-major, then the
-    /// sphere pairs `a < b` in order), which identifies it from step to step
-    /// whether or not the broad phase lists the contacts between.
-    pub fn contact_id(&self, a: usize, b: Counterpart) -> usize {
+    /// The canonical index of the potential contact `feature` (below
+    /// [`Model::features`]) of body `a` with `b`: `pair * features +
+    /// feature`, where `pair` is the pair's place in the full enumeration
+    /// (body-plane body-major, then the body pairs `a < b` in order). It
+    /// identifies the contact from step to step whether or not the broad
+    /// phase lists the contacts between, and the collision stage lists
+    /// contacts in ascending id.
+    pub fn contact_id(&self, a: usize, b: Counterpart, feature: usize) -> usize {
         let (n, np) = (self.bodies.len(), self.planes.len());
-        match b {
+        let pair = match b {
             Counterpart::Plane(p) => a * np + p,
             // Pairs (a, a+1 .. n-1) for a = 0, 1, ...: a (2n - a - 1) / 2 of
             // them come before row a.
@@ -558,16 +666,19 @@ impl Model {
             Counterpart::World => {
                 unreachable!("no shape touches the world itself: a limit's id is limit_id's")
             }
-        }
+        };
+        pair * self.features + feature
     }
 
-    /// The bodies of contact `id`: the inverse of [`Model::contact_id`].
+    /// The bodies of contact `id`: the inverse of [`Model::contact_id`]
+    /// but for the feature ([`Model::contact_feature`]).
     pub fn contact_bodies(&self, id: usize) -> (usize, Counterpart) {
         let (n, np) = (self.bodies.len(), self.planes.len());
         let shapes = self.potential_contacts();
         if id >= shapes {
             return self.limit_bodies((id - shapes) / 2);
         }
+        let id = id / self.features;
         if id < n * np {
             return (id / np, Counterpart::Plane(id % np));
         }
@@ -584,6 +695,12 @@ impl Model {
             }
         }
         (lo, Counterpart::Body(lo + 1 + k - before(lo)))
+    }
+
+    /// Which of its pair's contacts a shape contact `id` is (0 for the one
+    /// contact of a pair of spheres; a box's vertex against a plane...).
+    pub fn contact_feature(&self, id: usize) -> usize {
+        id % self.features
     }
 
     /// Whether bodies `i` and `j` can be in contact: not in one weld
@@ -619,9 +736,9 @@ impl Model {
         }
     }
 
-    /// Number of potential contacts: every sphere against every plane and,
-    /// unless `sphere_contacts` is off, every other sphere (7 in the
-    /// reference scene).
+    /// Number of potential contacts: [`Model::features`] for every body
+    /// against every plane and, unless `sphere_contacts` is off, every
+    /// other body (7 in the reference scene).
     pub fn potential_contacts(&self) -> usize {
         let n = self.bodies.len();
         let pairs = if self.params.sphere_contacts {
@@ -629,6 +746,6 @@ impl Model {
         } else {
             0
         };
-        n * self.planes.len() + pairs
+        (n * self.planes.len() + pairs) * self.features
     }
 }

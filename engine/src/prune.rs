@@ -14,26 +14,31 @@
 //! becomes basic at its sliding speed) and so the round-off of the active
 //! impulses, and a chaotic trajectory amplifies 1e-16 into O(1) within a
 //! second. So once the first solve is accepted, [`keep_active`] drops every
-//! contact without normal impulse and the step is solved once more on the
-//! active contacts alone: the final LCP then depends only on the active set,
-//! whatever was pruned, and pruned and full runs give the same bits.
+//! contact that is not closed (no normal impulse and a separating normal
+//! row) and the step is solved once more on the closed contacts alone: the
+//! final LCP then depends only on that set, whatever was pruned, and
+//! pruned and full runs give the same bits.
 //! The velocity check still runs after that solve.
 
 use super::collision::Counterpart;
 use super::contact::Contact;
-use super::model::Params;
+use super::model::Model;
 use super::rows::Row;
 use super::state::State;
 use nalgebra::Vector3;
 
 /// Marks the contacts that enter the LCP before the first solve: all of
 /// them with `--full`, else those that could close within the step.
-pub fn select(contacts: &mut [Contact], state: &State, nu_free: &[f64], p: &Params) {
-    // Largest linear speed of each body over the step (start or free). The
-    // gap of a sphere depends on its centre only, so spin does not enter.
+pub fn select(contacts: &mut [Contact], model: &Model, state: &State, nu_free: &[f64]) {
+    let p = &model.params;
+    // Largest speed of each body's surface over the step (start or free):
+    // linear, and for a box or capsule its spin times its reach (the gap
+    // of a sphere depends on its centre only, so spin does not enter).
     let speed = |i: usize| {
-        let free = Vector3::new(nu_free[6 * i], nu_free[6 * i + 1], nu_free[6 * i + 2]);
-        state.bodies[i].v.norm().max(free.norm())
+        let at = |k: usize| Vector3::new(nu_free[k], nu_free[k + 1], nu_free[k + 2]);
+        let b = &state.bodies[i];
+        let spin = b.w.norm().max(at(6 * i + 3).norm());
+        b.v.norm().max(at(6 * i).norm()) + spin * model.bodies[i].shape.spin_reach()
     };
     for c in contacts.iter_mut() {
         if c.limit.is_some() {
@@ -76,13 +81,29 @@ pub fn check_left_out(contacts: &mut [Contact], nu: &[f64], h: f64, relaxed: boo
     added
 }
 
-/// Keeps in the LCP only the contacts with a positive normal impulse in the
-/// solution `z` (normal row `i` belongs to `contacts[lcp_contacts[i]]`);
-/// returns whether any contact was dropped.
-pub fn keep_active(contacts: &mut [Contact], lcp_contacts: &[usize], z: &[f64]) -> bool {
+/// A normal row's residual `w` (m/s) at most this counts as closed: its
+/// contact is kept for the canonical re-solve with or without impulse.
+pub const CLOSED: f64 = 1e-9;
+
+/// Keeps in the LCP only the contacts that are closed in the solution of
+/// `m` with velocities `nu`: a positive normal impulse, or a normal row
+/// whose residual `w = G_n^T nu' + a_n` is at most [`CLOSED`]; returns
+/// whether any contact was dropped.
+///
+/// Why the closed ones without impulse too: where the support is
+/// statically indeterminate (a box on four vertices, one rigid plane)
+/// Lemke answers a vertex of the solution set, three vertices carrying
+/// the weight, and which three depends on its pivot order, so on what
+/// else the first LCP held: a set of the active contacts alone would
+/// differ between the pruned and the full run. The closed set does not:
+/// `z > 0` implies `w = 0`, and the velocities, so `w`, are the same
+/// whichever vertex was answered.
+pub fn keep_active(contacts: &mut [Contact], m: &crate::mlcp::Mlcp, nu: &[f64]) -> bool {
     let mut dropped = false;
-    for (i, &ci) in lcp_contacts.iter().enumerate() {
-        if z[i] <= 0.0 {
+    for (i, &ci) in m.lcp_contacts.iter().enumerate() {
+        let row = m.nb + i;
+        let w = m.rows[row].velocity(nu) + m.offset[row];
+        if m.z[i] <= 0.0 && w > CLOSED {
             contacts[ci].in_lcp = false;
             dropped = true;
         }

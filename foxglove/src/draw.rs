@@ -8,7 +8,7 @@
 
 use crate::palette;
 use cosim_shared::scene::WORLD;
-use cosim_shared::Scene;
+use cosim_shared::{Scene, ShapeDesc};
 use nalgebra::{Quaternion, Unit, UnitQuaternion, Vector3};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -44,25 +44,6 @@ impl Pose {
 pub struct Arrow {
     pub at: Vector3<f64>,
     pub force: Vector3<f64>,
-}
-
-/// What the other side of a contact is, for its point.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Other {
-    /// A plane with this outward unit normal.
-    Plane(Vector3<f64>),
-    /// A body with its centre here.
-    Body(Vector3<f64>),
-}
-
-/// The contact point on sphere `a` (centre, radius) against `other`: the
-/// sphere's point nearest the other side. The figures' animation, the
-/// recordings and the live view draw contacts here.
-pub fn contact_point(centre: Vector3<f64>, radius: f64, other: Other) -> Vector3<f64> {
-    match other {
-        Other::Plane(normal) => centre - normal * radius,
-        Other::Body(c) => centre + (c - centre).normalize() * radius,
-    }
 }
 
 /// A time in s as nanoseconds (what MCAP and the WebSocket protocol stamp).
@@ -130,7 +111,7 @@ fn entity(stamp: &Value, id: &str, parts: &[(&str, Value)]) -> Value {
 #[derive(Debug, Clone)]
 pub struct Drawing {
     names: Vec<String>,
-    radii: Vec<f64>,
+    shapes: Vec<ShapeDesc>,
     planes: Vec<(String, Vector3<f64>, Vector3<f64>)>,
     joints: Vec<Link>,
 }
@@ -156,7 +137,7 @@ impl Drawing {
         let end = |name: &str| (name != WORLD).then(|| index.get(name).copied()).flatten();
         Drawing {
             names: scene.bodies.iter().map(|b| b.name.clone()).collect(),
-            radii: scene.bodies.iter().map(|b| b.radius).collect(),
+            shapes: scene.bodies.iter().map(|b| b.shape()).collect(),
             planes: scene
                 .planes
                 .iter()
@@ -186,36 +167,62 @@ impl Drawing {
         &self.names
     }
 
-    /// Radius of body `i`.
-    pub fn radius(&self, i: usize) -> Option<f64> {
-        self.radii.get(i).copied()
-    }
-
     /// Outward unit normal of plane `i`.
     pub fn plane_normal(&self, i: usize) -> Option<Vector3<f64>> {
         self.planes.get(i).map(|p| p.1)
     }
 
-    /// The `foxglove.SceneUpdate` of a state at time `t`: a sphere per
-    /// body with a small marker sphere on its body x axis (the rotation
-    /// shows), a thin large box per plane, a line per joint (anchor or
-    /// centre to centre), an arrow per contact force, from the contact
-    /// point along the force, [`ARROW_PER_DECADE`] per decade of newtons.
+    /// The `foxglove.SceneUpdate` of a state at time `t`: per body its
+    /// shape (a sphere, a cube, a capsule as a cylinder between two
+    /// spheres) with a small marker sphere on its body x axis (the
+    /// rotation shows), a thin large box per plane, a line per joint
+    /// (anchor or centre to centre), an arrow per contact force, from the
+    /// contact point along the force, [`ARROW_PER_DECADE`] per decade of
+    /// newtons.
     pub fn scene_update(&self, t: f64, poses: &[Pose], arrows: &[Arrow]) -> Value {
         let stamp = time(t);
         let mut entities = Vec::with_capacity(poses.len() + self.planes.len() + 2);
-        for (b, (p, r)) in poses.iter().zip(&self.radii).enumerate() {
+        for (b, (p, shape)) in poses.iter().zip(&self.shapes).enumerate() {
             let (x, q) = (&p.position, &p.orientation);
-            let marker = x + q * Vector3::new(0.75 * r, 0.0, 0.0);
-            let spheres = json!([
-                { "pose": pose(x, q), "size": vec3(&Vector3::repeat(2.0 * r)), "color": color(b, 1.0) },
-                { "pose": pose(&marker, q), "size": vec3(&Vector3::repeat(0.35 * r)), "color": grey(0.1, 1.0) }
-            ]);
-            entities.push(entity(
-                &stamp,
-                &format!("body/{}", self.names[b]),
-                &[("spheres", spheres)],
-            ));
+            let c = color(b, 1.0);
+            let ball = |at: &Vector3<f64>, r: f64, c: &Value| json!({ "pose": pose(at, q), "size": vec3(&Vector3::repeat(2.0 * r)), "color": c });
+            // The marker just inside the surface on the body's x axis.
+            let (reach, size) = match *shape {
+                ShapeDesc::Sphere { radius } => (0.75 * radius, 0.35 * radius),
+                ShapeDesc::Capsule { radius, .. } => (0.75 * radius, 0.35 * radius),
+                ShapeDesc::Box { half_extents: h } => {
+                    let small = h[0].min(h[1]).min(h[2]);
+                    (h[0], 0.7 * small)
+                }
+            };
+            let marker = x + q * Vector3::new(reach, 0.0, 0.0);
+            let mut spheres = vec![ball(&marker, 0.5 * size, &grey(0.1, 1.0))];
+            let mut parts = Vec::new();
+            match *shape {
+                ShapeDesc::Sphere { radius } => spheres.insert(0, ball(x, radius, &c)),
+                ShapeDesc::Capsule {
+                    radius,
+                    half_length,
+                } => {
+                    let axis = q * Vector3::new(0.0, 0.0, half_length);
+                    spheres.insert(0, ball(&(x - axis), radius, &c));
+                    spheres.insert(1, ball(&(x + axis), radius, &c));
+                    // Foxglove's cylinder runs along its pose's z.
+                    parts.push((
+                        "cylinders",
+                        json!([{ "pose": pose(x, q),
+                                 "size": vec3(&Vector3::new(2.0 * radius, 2.0 * radius, 2.0 * half_length)),
+                                 "bottom_scale": 1.0, "top_scale": 1.0, "color": c }]),
+                    ));
+                }
+                ShapeDesc::Box { half_extents: h } => parts.push((
+                    "cubes",
+                    json!([{ "pose": pose(x, q),
+                             "size": vec3(&(Vector3::from(h) * 2.0)), "color": c }]),
+                )),
+            }
+            parts.push(("spheres", Value::Array(spheres)));
+            entities.push(entity(&stamp, &format!("body/{}", self.names[b]), &parts));
         }
         for (name, n, point) in &self.planes {
             // The box's top face on the plane.
@@ -310,15 +317,6 @@ pub fn joint_coordinate(position: f64, rate: f64) -> Value {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn a_contact_point_lies_on_the_sphere_towards_the_other_side() {
-        let c = Vector3::new(1.0, 2.0, 3.0);
-        let on_floor = contact_point(c, 0.5, Other::Plane(Vector3::z()));
-        assert_eq!(on_floor, Vector3::new(1.0, 2.0, 2.5));
-        let towards = contact_point(c, 0.5, Other::Body(Vector3::new(4.0, 2.0, 3.0)));
-        assert_eq!(towards, Vector3::new(1.5, 2.0, 3.0));
-    }
 
     #[test]
     fn an_arrow_points_along_its_force() {

@@ -13,5 +13,5 @@ pub mod palette;
 pub mod record;
 pub mod schema;
 
-pub use draw::{Arrow, Drawing, Other, Pose};
+pub use draw::{Arrow, Drawing, Pose};
 pub use live::{Channel, Live};

@@ -105,8 +105,10 @@ fn states(
         .iter()
         .map(|c| format!("/joints/{}", c.name))
         .collect();
+    let mut state = crate::engine::State::initial(model);
     for (i, &t) in run.t.iter().enumerate() {
         let poses: Vec<Pose> = run.bodies.iter().map(|b| body_pose(&b.rows[i])).collect();
+        crate::plot::pose_state(run, i, &mut state);
         // Contact forces of the step that ended in this state.
         let mut arrows = Vec::new();
         if i > 0 {
@@ -117,7 +119,7 @@ fn states(
                 if kind != "normal" {
                     continue;
                 }
-                let Some(at) = crate::plot::contact_point(model, run, i, name) else {
+                let Some(at) = crate::plot::contact_point(model, &state, name) else {
                     continue;
                 };
                 arrows.push(Arrow {

@@ -126,8 +126,8 @@ impl Writers {
                 ImpulseKind::JointTorque => ("joint_torque", model.joints[r.index].name.clone()),
                 ImpulseKind::JointLimit => ("joint_limit", model.joints[r.index].name.clone()),
                 ImpulseKind::JointMotor => ("joint_motor", model.joints[r.index].name.clone()),
-                ImpulseKind::Normal => ("normal", contact_name(model, r.a, r.b)),
-                ImpulseKind::Friction => ("friction", contact_name(model, r.a, r.b)),
+                ImpulseKind::Normal => ("normal", contact_name(model, r.index, r.a, r.b)),
+                ImpulseKind::Friction => ("friction", contact_name(model, r.index, r.a, r.b)),
             };
             let _ = writeln!(
                 self.line,
@@ -203,9 +203,14 @@ impl Writers {
     }
 }
 
-/// A contact's name: `a/b`, e.g. `upper/floor`.
-pub fn contact_name(model: &Model, a: Party, b: Party) -> String {
-    format!("{}/{}", party_name(model, a), party_name(model, b))
+/// Contact `id`'s name: `a/b`, e.g. `upper/floor`, and `a/b#k` for a
+/// pair's contact `k > 0` (`cosim_shared::contact_label`).
+pub fn contact_name(model: &Model, id: usize, a: Party, b: Party) -> String {
+    cosim_shared::contact_label(
+        party_name(model, a),
+        party_name(model, b),
+        model.contact_feature(id),
+    )
 }
 
 /// The ladder's counts as `summary.json` holds them: steps by the highest

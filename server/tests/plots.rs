@@ -108,16 +108,15 @@ fn figures_and_animation_decode_follow_the_trajectory_and_repeat() {
         let radii: Vec<f64> = model
             .bodies
             .iter()
-            .map(|body| match body.shape {
-                cosim_server::engine::model::Shape::Sphere { radius } => radius,
-            })
+            .map(|body| body.shape.bounding_radius())
             .collect();
         if gap < (radii[0] + radii[1]) * cam.scale + 2.0 {
             continue;
         }
         for (b, &radius) in radii.iter().enumerate() {
             let (cx, cy) = cam.project(&centre(b, i));
-            let (mx, my) = cam.project(&marker(radius, &run.bodies[b].rows[i]));
+            let shape = &model.bodies[b].shape;
+            let (mx, my) = cam.project(&marker(shape, &run.bodies[b].rows[i]));
             if ((mx - cx).powi(2) + (my - cy).powi(2)).sqrt() < 0.3 * radius * cam.scale {
                 continue;
             }

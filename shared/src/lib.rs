@@ -20,7 +20,7 @@ pub const JOINTS_HEADER: &str = "step,t,joint,type,position,rate,anchor_error,an
 pub const IMPULSES_HEADER: &str = "step,t,kind,name,body_a,body_b,px,py,pz";
 
 pub use scene::{
-    BodyDesc, CameraDesc, FrictionCone, JointDesc, JointKind, PgsDesc, PgsStop, PlaneDesc,
-    PositionUpdate, Scene, SceneError, SimDesc, SolverChoice, DEFAULT_PGS_MAX_ITERATIONS,
-    DEFAULT_PGS_TOLERANCE,
+    contact_label, BodyDesc, CameraDesc, FrictionCone, JointDesc, JointKind, PgsDesc, PgsStop,
+    PlaneDesc, PositionUpdate, Scene, SceneError, ShapeDesc, SimDesc, SolverChoice,
+    DEFAULT_PGS_MAX_ITERATIONS, DEFAULT_PGS_TOLERANCE, MAX_FEATURES,
 };

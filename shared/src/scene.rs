@@ -311,12 +311,19 @@ fn default_contact_margin() -> f64 {
     DEFAULT_CONTACT_MARGIN
 }
 
-/// `[[body]]`: a solid sphere.
+/// `[[body]]`: a solid sphere (`radius`), capsule (`radius` and
+/// `half_length`, its segment along the body's z axis, as MuJoCo's and
+/// ODE's) or box (`half_extents`, along the body's axes).
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BodyDesc {
     pub name: String,
-    pub radius: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub half_length: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub half_extents: Option<[f64; 3]>,
     pub mass: f64,
     pub position: [f64; 3],
     /// Unit quaternion, scalar first.
@@ -333,6 +340,109 @@ pub struct BodyDesc {
     /// Constant world-frame force (N) on the centre of mass, besides gravity.
     #[serde(default)]
     pub force: [f64; 3],
+}
+
+/// The most contacts one pair of shapes has: a box's eight vertices
+/// against a plane (of which the engine lists the four lowest) bound every
+/// pair's feature numbers.
+pub const MAX_FEATURES: usize = 8;
+
+/// The name a shape contact goes by in impulses.csv and the recordings:
+/// `a/b` for a pair's first (a pair of spheres' only) contact, `a/b#k`
+/// for its feature `k` (a box's vertex, a capsule's end...).
+pub fn contact_label(a: &str, b: &str, feature: usize) -> String {
+    if feature == 0 {
+        format!("{a}/{b}")
+    } else {
+        format!("{a}/{b}#{feature}")
+    }
+}
+
+/// A body's shape as the scene gives it (`BodyDesc::shape`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ShapeDesc {
+    Sphere {
+        radius: f64,
+    },
+    /// Half the segment's length along the body's z axis, and the radius.
+    Capsule {
+        radius: f64,
+        half_length: f64,
+    },
+    Box {
+        half_extents: [f64; 3],
+    },
+}
+
+impl ShapeDesc {
+    /// The radius of the smallest sphere about the centre that holds the
+    /// shape (m).
+    pub fn bounding_radius(&self) -> f64 {
+        match *self {
+            ShapeDesc::Sphere { radius } => radius,
+            ShapeDesc::Capsule {
+                radius,
+                half_length,
+            } => radius + half_length,
+            ShapeDesc::Box { half_extents: h } => (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt(),
+        }
+    }
+}
+
+impl BodyDesc {
+    /// A sphere's description (what most scenes and tests write).
+    pub fn sphere(name: &str, radius: f64, mass: f64, position: [f64; 3]) -> BodyDesc {
+        BodyDesc {
+            name: name.to_string(),
+            radius: Some(radius),
+            half_length: None,
+            half_extents: None,
+            mass,
+            position,
+            orientation: identity_quaternion(),
+            velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+            friction: 0.0,
+            restitution: 0.0,
+            force: [0.0; 3],
+        }
+    }
+
+    /// The body's shape, or which fields are missing or clash (the message
+    /// of the error `validate` names the body's field with).
+    pub fn shape_or_error(&self) -> Result<ShapeDesc, (&'static str, String)> {
+        match (self.radius, self.half_length, self.half_extents) {
+            (Some(radius), None, None) => Ok(ShapeDesc::Sphere { radius }),
+            (Some(radius), Some(half_length), None) => Ok(ShapeDesc::Capsule {
+                radius,
+                half_length,
+            }),
+            (None, None, Some(half_extents)) => Ok(ShapeDesc::Box { half_extents }),
+            (None, Some(_), None) => Err((
+                "radius",
+                "is missing: a capsule needs radius beside half_length".into(),
+            )),
+            (None, None, None) => Err((
+                "radius",
+                "is missing: give radius (a sphere), radius and half_length (a capsule) \
+                 or half_extents (a box)"
+                    .into(),
+            )),
+            (_, _, Some(_)) => Err((
+                "half_extents",
+                "with radius or half_length: a body has one shape, a box (half_extents \
+                 alone), a sphere (radius) or a capsule (radius and half_length)"
+                    .into(),
+            )),
+        }
+    }
+
+    /// The body's shape; a sphere of radius 0 where the description has
+    /// none (`validate` refuses it first).
+    pub fn shape(&self) -> ShapeDesc {
+        self.shape_or_error()
+            .unwrap_or(ShapeDesc::Sphere { radius: 0.0 })
+    }
 }
 
 fn identity_quaternion() -> [f64; 4] {
@@ -521,6 +631,21 @@ impl Scene {
     }
 
     /// Checks every rule that TOML's types cannot express.
+    /// Contact ids per pair of shapes (the engine's `Model::features`): 1
+    /// in a scene of spheres, which touch at one point, else
+    /// [`MAX_FEATURES`]. A contact's id is `pair * features + feature`.
+    pub fn contact_features(&self) -> usize {
+        if self
+            .bodies
+            .iter()
+            .all(|b| matches!(b.shape(), ShapeDesc::Sphere { .. }))
+        {
+            1
+        } else {
+            MAX_FEATURES
+        }
+    }
+
     pub fn validate(&self, file: &str) -> Result<(), SceneError> {
         let err = |field: String, message: String| SceneError {
             file: file.to_string(),
@@ -617,7 +742,29 @@ impl Scene {
         for (i, b) in self.bodies.iter().enumerate() {
             claim(&b.name, format!("body[{i}].name"))?;
             let f = |k: &str| format!("body {:?}.{k}", b.name);
-            positive(b.radius).map_err(|m| err(f("radius"), m))?;
+            match b.shape_or_error().map_err(|(k, m)| err(f(k), m))? {
+                ShapeDesc::Sphere { radius } => {
+                    positive(radius).map_err(|m| err(f("radius"), m))?;
+                }
+                ShapeDesc::Capsule {
+                    radius,
+                    half_length,
+                } => {
+                    positive(radius).map_err(|m| err(f("radius"), m))?;
+                    positive(half_length).map_err(|m| err(f("half_length"), m))?;
+                }
+                ShapeDesc::Box { half_extents } => {
+                    if half_extents.iter().any(|&h| positive(h).is_err()) {
+                        return Err(err(
+                            f("half_extents"),
+                            format!(
+                                "= {half_extents:?}: each half extent must be a positive \
+                                 finite number"
+                            ),
+                        ));
+                    }
+                }
+            }
             positive(b.mass).map_err(|m| err(f("mass"), m))?;
             finite3(&b.position).map_err(|m| err(f("position"), m))?;
             finite3(&b.velocity).map_err(|m| err(f("velocity"), m))?;

@@ -89,7 +89,8 @@ fn stepping_allocates_nothing_after_warm_up() {
 
 /// The same with a hinge and a fixed joint (their rotation rows) and a
 /// contact between a jointed body and a free one: the shipped hinges,
-/// slider and limits scenes (the last: limits hit and held).
+/// slider and limits scenes (the last: limits hit and held), and the
+/// boxes and capsules of shapes.toml.
 #[test]
 fn hinges_sliders_and_fixed_joints_allocate_nothing_after_warm_up() {
     // And sliders: slider.toml's rail and pendulum run into a ball.
@@ -100,6 +101,10 @@ fn hinges_sliders_and_fixed_joints_allocate_nothing_after_warm_up() {
         ("slider.toml", cosim_shared::SolverChoice::Pgs),
         ("limits.toml", cosim_shared::SolverChoice::Lemke),
         ("limits.toml", cosim_shared::SolverChoice::Pgs),
+        // Boxes and capsules: each shape pair's contacts, clipped on the
+        // stack (collision/box_box.rs).
+        ("shapes.toml", cosim_shared::SolverChoice::Lemke),
+        ("shapes.toml", cosim_shared::SolverChoice::Pgs),
     ] {
         let text = cosim_tests::shipped_scene(name);
         let scene = cosim_shared::Scene::parse(&text, name).expect("shipped scene");

@@ -1,5 +1,6 @@
 //! The skips of the step do not change the answer (issue #6): pruning
-//! (with Lemke to the bit, with PGS to its tolerance),
+//! (with Lemke to the bit, but on boxes' indeterminate supports to
+//! round-off; with PGS to its tolerance),
 //! the broad phase (issue 14), no friction rows where mu = 0, Lemke's
 //! support guess, PGS warm start,
 //! each on and off on the same scene (`cosim-server bench skips` times them).
@@ -35,7 +36,16 @@ fn skips_do_not_change_the_trajectory() {
         // rule; not under the residual rule, piles): each step agrees to
         // the solver's tolerance, as the warm start's (measured: 1e-10 m/s
         // apart at most, not to the bit).
+        // Pruning on boxes and capsules: a box resting on four vertices
+        // with friction is a statically indeterminate support, whose
+        // frictional LCP has many solutions, not all with the same
+        // velocities (measured: a contact with z = 7.7e-8 in one run has
+        // z = 0 and w = 2.8e-7 m/s in the other), so Lemke's answer
+        // depends on what else its first LCP held, and the canonical
+        // re-solve (prune.rs) cannot name one set for both. The runs
+        // agree to round-off (measured 1.9e-15 m over 2,000 steps).
         let (d, bound) = match m.skip {
+            s if s.starts_with("pruning (boxes") => (skips::distance(&m.on, &m.off), 1e-12),
             s if s.starts_with("pruning with PGS") => (m.per_step.difference, 1e-6),
             s if s.starts_with("pruning") => (skips::distance(&m.on, &m.off), 0.0),
             // The broad phase leaves out only pairs that prune.rs leaves

@@ -163,13 +163,10 @@ fn contact_ids_name_their_bodies_back() {
     let m = scene(None, SLEEP);
     let n = m.bodies.len();
     for a in 0..n {
-        for p in 0..m.planes.len() {
-            let b = Counterpart::Plane(p);
-            assert_eq!(m.contact_bodies(m.contact_id(a, b)), (a, b));
-        }
-        for j in a + 1..n {
-            let b = Counterpart::Body(j);
-            assert_eq!(m.contact_bodies(m.contact_id(a, b)), (a, b));
+        let planes = (0..m.planes.len()).map(Counterpart::Plane);
+        for b in planes.chain((a + 1..n).map(Counterpart::Body)) {
+            let id = m.contact_id(a, b, 0);
+            assert_eq!((m.contact_bodies(id), m.contact_feature(id)), ((a, b), 0));
         }
     }
 }
@@ -182,8 +179,8 @@ fn a_sleeping_island_keeps_its_warm_start() {
     use cosim_server::engine::collision::Counterpart;
     let mut model = scene(None, SLEEP);
     model.params.solver = cosim_shared::SolverChoice::Pgs;
-    let floor = model.contact_id(0, Counterpart::Plane(0));
-    let stack = model.contact_id(0, Counterpart::Body(1));
+    let floor = model.contact_id(0, Counterpart::Plane(0), 0);
+    let stack = model.contact_id(0, Counterpart::Body(1), 0);
     let mut e = Engine::new(model);
     run_until_asleep(&mut e, 3);
     for _ in 0..100 {

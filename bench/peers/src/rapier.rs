@@ -3,7 +3,7 @@
 
 use cosim_server::bench::accuracy::{median_run_time, no_figure, Point, Trajectory};
 use cosim_server::bench::cases::{CaseId, Pose, Sample, Scorer};
-use cosim_shared::Scene;
+use cosim_shared::{Scene, ShapeDesc};
 use rapier3d_f64::na::Unit;
 use rapier3d_f64::prelude::*;
 use std::time::Instant;
@@ -62,8 +62,16 @@ pub(crate) fn build(scene: &Scene, sleep: bool) -> World {
             .linvel(vec3(b.velocity))
             .angvel(vec3(b.angular_velocity))
             .can_sleep(sleep);
-        let c = ColliderBuilder::ball(b.radius)
-            .mass(b.mass)
+        let c = match b.shape() {
+            ShapeDesc::Sphere { radius } => ColliderBuilder::ball(radius),
+            // Rapier's capsule along z, as ours: half its segment, radius.
+            ShapeDesc::Capsule {
+                radius,
+                half_length,
+            } => ColliderBuilder::capsule_z(half_length, radius),
+            ShapeDesc::Box { half_extents: h } => ColliderBuilder::cuboid(h[0], h[1], h[2]),
+        }
+        .mass(b.mass)
             .friction(b.friction)
             .restitution(b.restitution)
             .friction_combine_rule(CoefficientCombineRule::Min)

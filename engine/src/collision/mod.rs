@@ -1,18 +1,30 @@
 //! Collision stage: the signed gap, normal and lever arms of every potential
-//! contact, in a canonical order (each sphere against each plane, body-major,
-//! then each pair of spheres) so that a contact's canonical index
-//! (`Model::contact_id`) is its identity from step to step. One file per
-//! shape pair; `broad.rs` finds the sphere pairs within reach.
+//! contact, in a canonical order (each body against each plane,
+//! body-major, then each pair of bodies; within a pair, by feature) so
+//! that a contact's canonical index (`Model::contact_id`) is its identity
+//! from step to step. One file per shape pair; `broad.rs` finds the body
+//! pairs within reach, on bounding spheres; `segment.rs` holds the
+//! closest-point pieces the pairs share.
 
+mod box_box;
+mod box_plane;
 mod broad;
+mod capsule_box;
+mod capsule_capsule;
+mod capsule_plane;
+mod segment;
+mod sphere_box;
+mod sphere_capsule;
 mod sphere_plane;
 mod sphere_sphere;
 
-use super::model::{Model, Shape};
+use super::model::{Model, Plane, Shape};
 use super::state::State;
 use nalgebra::Vector3;
 
+pub use box_plane::vertex;
 pub use broad::Broad;
+pub use segment::Pose;
 pub use sphere_plane::sphere_plane;
 pub use sphere_sphere::sphere_sphere;
 
@@ -31,6 +43,10 @@ pub enum Counterpart {
 pub struct Geometry {
     pub a: usize,
     pub b: Counterpart,
+    /// Which of the pair's contacts (below `Model::features`): 0 for a
+    /// pair that touches at one point; a box's vertex, a capsule's end, a
+    /// clipped point... (each pair's file).
+    pub feature: usize,
     /// Signed gap: >= 0 when separated.
     pub gap: f64,
     /// Unit normal pointing from B towards A.
@@ -83,9 +99,188 @@ impl Listing<'_> {
     }
 }
 
+impl Geometry {
+    /// The same contact seen from B: the bodies, the lever arms and the
+    /// normal swapped (a pair's file computes it in one order of shapes).
+    fn flipped(self) -> Geometry {
+        let Counterpart::Body(b) = self.b else {
+            return self;
+        };
+        Geometry {
+            a: b,
+            b: Counterpart::Body(self.a),
+            normal: -self.normal,
+            r_a: self.r_b,
+            r_b: self.r_a,
+            ..self
+        }
+    }
+
+    /// The contact point on A's surface (world).
+    pub fn on_a(&self, state: &State) -> Vector3<f64> {
+        state.bodies[self.a].x + self.r_a
+    }
+}
+
+/// Body `i`'s pose.
+fn pose(state: &State, i: usize) -> Pose {
+    Pose {
+        x: state.bodies[i].x,
+        q: state.bodies[i].q,
+    }
+}
+
+/// Body `i`'s contacts with plane `p` whose gap is at most `within` (m).
+pub fn body_plane(
+    model: &Model,
+    state: &State,
+    i: usize,
+    p: usize,
+    within: f64,
+    out: &mut Vec<Geometry>,
+) {
+    let plane: &Plane = &model.planes[p];
+    let at = pose(state, i);
+    match model.bodies[i].shape {
+        Shape::Sphere { radius } => {
+            let g = sphere_plane(i, at.x, radius, p, plane);
+            if g.gap <= within {
+                out.push(g);
+            }
+        }
+        Shape::Box { half } => box_plane::box_plane(i, &at, &half, p, plane, within, out),
+        Shape::Capsule {
+            radius,
+            half_length,
+        } => capsule_plane::capsule_plane(i, &at, (radius, half_length), p, plane, within, out),
+    }
+}
+
+/// The contacts of bodies `i < j` whose gap is at most `within` (m), in
+/// ascending feature (a pair of spheres' one contact whatever its gap).
+pub fn body_pair(
+    model: &Model,
+    state: &State,
+    i: usize,
+    j: usize,
+    within: f64,
+    out: &mut Vec<Geometry>,
+) {
+    use Shape::{Box, Capsule, Sphere};
+    let (pi, pj) = (pose(state, i), pose(state, j));
+    let (si, sj) = (model.bodies[i].shape, model.bodies[j].shape);
+    let start = out.len();
+    let mut one = |g: Geometry| {
+        if g.gap <= within {
+            out.push(g);
+        }
+    };
+    // Each pair's file takes its shapes in one order; the other order is
+    // computed as (j, i) and flipped below.
+    let flip = match (si, sj) {
+        // Listed whatever `within` says: the broad phase's test for a pair
+        // of spheres is this very gap (`broad.rs`), and repeating it in
+        // another order of sums could drop a pair it kept by a rounding.
+        (Sphere { radius: ri }, Sphere { radius: rj }) => {
+            out.push(sphere_sphere(i, pi.x, ri, j, pj.x, rj));
+            false
+        }
+        (Sphere { radius }, Box { half }) => {
+            one(sphere_box::ball_box(
+                i, pi.x, radius, None, j, &pj, &half, 0,
+            ));
+            false
+        }
+        (Box { half }, Sphere { radius }) => {
+            one(sphere_box::ball_box(
+                j, pj.x, radius, None, i, &pi, &half, 0,
+            ));
+            true
+        }
+        (
+            Sphere { radius },
+            Capsule {
+                radius: rc,
+                half_length,
+            },
+        ) => {
+            one(sphere_capsule::sphere_capsule(
+                i,
+                pi.x,
+                radius,
+                j,
+                &pj,
+                rc,
+                half_length,
+            ));
+            false
+        }
+        (
+            Capsule {
+                radius: rc,
+                half_length,
+            },
+            Sphere { radius },
+        ) => {
+            one(sphere_capsule::sphere_capsule(
+                j,
+                pj.x,
+                radius,
+                i,
+                &pi,
+                rc,
+                half_length,
+            ));
+            true
+        }
+        (
+            Capsule {
+                radius: ri,
+                half_length: li,
+            },
+            Capsule {
+                radius: rj,
+                half_length: lj,
+            },
+        ) => {
+            capsule_capsule::capsule_capsule(i, &pi, (ri, li), j, &pj, (rj, lj), within, out);
+            false
+        }
+        (
+            Capsule {
+                radius,
+                half_length,
+            },
+            Box { half },
+        ) => {
+            capsule_box::capsule_box(i, &pi, (radius, half_length), j, &pj, &half, within, out);
+            false
+        }
+        (
+            Box { half },
+            Capsule {
+                radius,
+                half_length,
+            },
+        ) => {
+            capsule_box::capsule_box(j, &pj, (radius, half_length), i, &pi, &half, within, out);
+            true
+        }
+        (Box { half: hi }, Box { half: hj }) => {
+            box_box::box_box(i, &pi, &hi, j, &pj, &hj, within, out);
+            false
+        }
+    };
+    if flip {
+        for g in &mut out[start..] {
+            *g = g.flipped();
+        }
+    }
+}
+
 /// Fills `out` with the potential contacts of the scene that `listing`
-/// names, in canonical order: every sphere against every plane, then the
-/// sphere pairs. With `sphere_contacts = false` there are no pairs; they
+/// names, in canonical order: every body against every plane, then the
+/// body pairs. With `sphere_contacts = false` there are no pairs; they
 /// come last in the order, so the other contacts keep their identities.
 pub fn detect(
     model: &Model,
@@ -96,41 +291,42 @@ pub fn detect(
 ) {
     out.clear();
     let all = matches!(listing, Listing::All);
-    for (i, body) in model.bodies.iter().enumerate() {
-        let Shape::Sphere { radius } = body.shape;
+    // The gap up to which a contact is listed: none beyond for `All`.
+    let within = |reach: f64| {
+        if all {
+            f64::INFINITY
+        } else {
+            reach + listing.margin()
+        }
+    };
+    let bound = |i: usize| model.bodies[i].shape.bounding_radius();
+    for i in 0..model.bodies.len() {
         // A body welded to the world is the world's (`Model::weld`).
         if model.weld[i] == crate::model::WELDED_TO_WORLD {
             continue;
         }
+        let x = state.bodies[i].x;
         for (p, plane) in model.planes.iter().enumerate() {
-            let g = sphere_plane(i, state.bodies[i].x, radius, p, plane);
-            if all || g.gap <= listing.reach(i) + listing.margin() {
-                out.push(g);
+            let w = within(listing.reach(i));
+            // The bounding sphere's gap bounds every feature's from below.
+            if plane.normal.dot(&x) - plane.offset - bound(i) > w {
+                continue;
             }
+            body_plane(model, state, i, p, w, out);
         }
     }
     if !model.params.sphere_contacts {
         return;
     }
-    let radius = |i: usize| {
-        let Shape::Sphere { radius } = model.bodies[i].shape;
-        radius
-    };
-    let pair = |(i, j): (usize, usize)| {
-        sphere_sphere(
-            i,
-            state.bodies[i].x,
-            radius(i),
-            j,
-            state.bodies[j].x,
-            radius(j),
-        )
-    };
     let n = model.bodies.len();
     let apart = |&(i, j): &(usize, usize)| model.may_touch(i, j);
     if all {
         for i in 0..n {
-            out.extend((i + 1..n).map(|j| (i, j)).filter(apart).map(pair));
+            for j in i + 1..n {
+                if apart(&(i, j)) {
+                    body_pair(model, state, i, j, f64::INFINITY, out);
+                }
+            }
         }
         return;
     }
@@ -139,10 +335,34 @@ pub fn detect(
     broad.pairs(
         n,
         |i| state.bodies[i].x,
-        radius,
+        bound,
         reach,
         listing.margin(),
         pairs,
     );
-    out.extend(pairs.iter().filter(|p| apart(p)).map(|&p| pair(p)));
+    for &(i, j) in pairs.iter().filter(|p| apart(p)) {
+        body_pair(model, state, i, j, within(reach(i) + reach(j)), out);
+    }
+}
+
+/// Where shape contact `id` touches on its body A's surface in `state`
+/// (world), recomputed from the poses: what the figures, the recordings
+/// and the live view draw a contact's force from. `None` for a joint
+/// limit's id or a feature the pair does not have in this state.
+pub fn contact_point(model: &Model, state: &State, id: usize) -> Option<Vector3<f64>> {
+    if id >= model.potential_contacts() {
+        return None;
+    }
+    let (a, b) = model.contact_bodies(id);
+    let feature = model.contact_feature(id);
+    let mut found = Vec::new();
+    match b {
+        Counterpart::Plane(p) => body_plane(model, state, a, p, f64::INFINITY, &mut found),
+        Counterpart::Body(j) => body_pair(model, state, a, j, f64::INFINITY, &mut found),
+        Counterpart::World => return None,
+    }
+    found
+        .iter()
+        .find(|g| g.feature == feature)
+        .map(|g| g.on_a(state))
 }

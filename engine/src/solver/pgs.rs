@@ -515,12 +515,25 @@ impl Pgs {
             let (w1, w2) = (t1.weighted(p.minv), t2.weighted(p.minv));
             let (a, b, d) = (t1.dot(&w1), t1.dot(&w2), t2.dot(&w2));
             let det = a * d - b * b;
-            let inv = if det > 1e-14 * (a * d).max(f64::MIN_POSITIVE) {
+            let scale = 0.5 * (a + d) + (0.25 * (a - d).powi(2) + b * b).sqrt();
+            // The block's step: its inverse where the block is a multiple
+            // of the identity (a sphere's contact: a point's mass and a
+            // lever along the normal), else 1 / its largest eigenvalue.
+            // Why: the sweep's fixed point `p = proj(p - S v)` with a
+            // Euclidean projection onto the cone's polygon is the friction
+            // of maximal dissipation (`-v` in the polygon's normal cone at
+            // `p`) only when S is a scalar; with the full inverse of an
+            // anisotropic block (a box's vertex, whose lever has a
+            // tangential part) it is another point, and PGS slid a box on
+            // an incline with 0.71 of its friction (tests/shapes.rs).
+            let isotropic = b.abs() <= 1e-9 * (a + d) && (a - d).abs() <= 1e-9 * (a + d);
+            let inv = if det <= 1e-14 * (a * d).max(f64::MIN_POSITIVE) {
+                [[0.0; 2]; 2]
+            } else if isotropic {
                 [[d / det, -b / det], [-b / det, a / det]]
             } else {
-                [[0.0; 2]; 2]
+                [[1.0 / scale, 0.0], [0.0, 1.0 / scale]]
             };
-            let scale = 0.5 * (a + d) + (0.25 * (a - d).powi(2) + b * b).sqrt();
             self.weighted.push(w1);
             self.weighted.push(w2);
             self.tangent.push(Tangent { t1, t2, inv, scale });

@@ -146,8 +146,10 @@ pub fn sample(engine: &Engine, out: &mut Sample) {
         .iter()
         .filter(|r| r.kind == ImpulseKind::Normal)
     {
-        out.forces
-            .push((contact_name(engine.model(), r.a, r.b), r.impulse.norm() / h));
+        out.forces.push((
+            contact_name(engine.model(), r.index, r.a, r.b),
+            r.impulse.norm() / h,
+        ));
     }
 }
 

@@ -353,7 +353,8 @@ impl Scorer {
             .iter()
             .zip(bodies)
             .map(|(b, p)| {
-                let j = 0.4 * b.mass * b.radius * b.radius;
+                let r = sphere_radius(b);
+                let j = 0.4 * b.mass * r * r;
                 0.5 * b.mass * v3(p.v).norm_squared() + 0.5 * j * v3(p.w).norm_squared()
                     - b.mass * g.dot(&v3(p.x))
             })
@@ -363,12 +364,12 @@ impl Scorer {
     /// The contact point's slip speed of body 0 on the first plane.
     fn slip(&self, p: &Pose) -> f64 {
         let n = v3(self.scene.planes[0].normal).normalize();
-        (v3(p.v) + v3(p.w).cross(&(-n * self.scene.bodies[0].radius))).norm()
+        (v3(p.v) + v3(p.w).cross(&(-n * sphere_radius(&self.scene.bodies[0])))).norm()
     }
 
     fn height(&self, p: &Pose) -> f64 {
         let n = v3(self.scene.planes[0].normal).normalize();
-        n.dot(&(v3(p.x) - v3(self.scene.planes[0].point))) - self.scene.bodies[0].radius
+        n.dot(&(v3(p.x) - v3(self.scene.planes[0].point))) - sphere_radius(&self.scene.bodies[0])
     }
 
     pub fn observe(&mut self, s: &Sample) {
@@ -542,4 +543,10 @@ impl Scorer {
             },
         }
     }
+}
+
+/// The radius of a case's body: every case is of spheres (the peers'
+/// shared ground), written by `text.rs`.
+fn sphere_radius(b: &cosim_shared::BodyDesc) -> f64 {
+    b.radius.unwrap_or(0.0)
 }

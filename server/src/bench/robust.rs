@@ -1,5 +1,5 @@
 //! `bench robust`: seeded random small scenes built to be hard for the
-//! solve (corners and creases, spheres exactly touching or overlapping by
+//! solve (corners and creases, spheres, boxes and capsules exactly touching or overlapping by
 //! up to a few mm, joints to the world whose pin may lie inside a friction
 //! cone, mu up to 1), each stepped and checked:
 //!
@@ -145,6 +145,7 @@ pub fn scene(seed: u64) -> String {
             centres.push((c, r));
         }
     }
+    let shapes = shaped(seed, &planes, &mut centres);
     let mus = [0.0, 0.3, 1.0];
     for (i, &(c, r)) in centres.iter().enumerate() {
         let v = if rng.uniform() < 0.4 {
@@ -156,7 +157,7 @@ pub fn scene(seed: u64) -> String {
                 rng.range(-1.0, 0.5),
             ]
         };
-        s += &sphere(
+        let body = sphere(
             &format!("s{i}"),
             r,
             rng.range(0.2, 3.0),
@@ -165,6 +166,10 @@ pub fn scene(seed: u64) -> String {
             rng.pick(&mus),
             rng.pick(&[0.0, 0.5]),
         );
+        s += &match &shapes[i] {
+            None => body,
+            Some(lines) => body.replacen(&format!("radius = {r:e}\n"), lines, 1),
+        };
     }
     for (k, (n, p)) in planes.iter().enumerate() {
         s += &plane(
@@ -266,6 +271,87 @@ pub fn scene(seed: u64) -> String {
     s
 }
 
+/// Turns some of the spheres placed by [`scene`] into boxes and capsules
+/// (from a stream of its own, so that every other draw keeps its value):
+/// per body, `None` (a sphere) or its shape's and orientation's lines.
+/// A turned body keeps the gap its sphere had to each plane it was placed
+/// against (within 5 mm), its centre moved out along that plane's normal
+/// by its extent's excess over the radius; one that would then sink more
+/// than 5 mm into a plane, or overlap another body's bounding sphere by
+/// more than 3 mm, stays a sphere.
+fn shaped(seed: u64, planes: &[PlaneDesc], centres: &mut [([f64; 3], f64)]) -> Vec<Option<String>> {
+    use crate::engine::model::Shape;
+    use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+    let mut rng = Rng::new(seed ^ 0x7368_6170_6573);
+    let mut out = vec![None; centres.len()];
+    let mut bound: Vec<f64> = centres.iter().map(|c| c.1).collect();
+    for i in 0..centres.len() {
+        let (c, r) = centres[i];
+        let kind = rng.uniform();
+        let raw = Quaternion::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+        let q = if raw.norm() > 0.1 {
+            UnitQuaternion::from_quaternion(raw)
+        } else {
+            UnitQuaternion::identity()
+        };
+        let (shape, lines) = if kind < 0.3 {
+            let half = Vector3::new(
+                r * rng.range(0.5, 1.2),
+                r * rng.range(0.5, 1.2),
+                r * rng.range(0.5, 1.2),
+            );
+            let lines = format!(
+                "half_extents = [{:e}, {:e}, {:e}]\n",
+                half.x, half.y, half.z
+            );
+            (Shape::Box { half }, lines)
+        } else if kind < 0.55 {
+            let (radius, half_length) = (r * rng.range(0.5, 0.9), r * rng.range(0.3, 1.5));
+            let lines = format!("radius = {radius:e}\nhalf_length = {half_length:e}\n");
+            (
+                Shape::Capsule {
+                    radius,
+                    half_length,
+                },
+                lines,
+            )
+        } else {
+            continue;
+        };
+        let mut x = Vector3::from(c);
+        for (n, p) in planes {
+            let n = Vector3::from(*n);
+            let sphere_gap = (x - Vector3::from(*p)).dot(&n) - r;
+            if sphere_gap < 5e-3 {
+                x += n * (shape.extent(&q, &n) - r);
+            }
+        }
+        let sinks = planes.iter().any(|(n, p)| {
+            let n = Vector3::from(*n);
+            (x - Vector3::from(*p)).dot(&n) - shape.extent(&q, &n) < -5e-3
+        });
+        let radius = shape.bounding_radius();
+        let overlaps = (0..centres.len())
+            .filter(|&k| k != i)
+            .any(|k| (Vector3::from(centres[k].0) - x).norm() < radius + bound[k] - 3e-3);
+        if sinks || overlaps {
+            continue;
+        }
+        centres[i].0 = x.into();
+        bound[i] = radius;
+        out[i] = Some(format!(
+            "{lines}orientation = [{:e}, {:e}, {:e}, {:e}]\n",
+            q.w, q.i, q.j, q.k
+        ));
+    }
+    out
+}
+
 /// What checking one scene found.
 #[derive(Debug, Clone, Default)]
 pub struct Check {
@@ -293,7 +379,8 @@ pub struct Check {
 ///
 /// - **Kinetic**: `K(nu') <= K(nu_free) + allowance`, with
 ///   `nu_free = nu + h M^-1 (F_ext + tau)` computed here (gravity, body
-///   forces, joint torques; spheres have no gyroscopic term) and the
+///   forces, joint torques, the gyroscopic term; kinetic energies with the
+///   start's world inertia) and the
 ///   allowance `StepReport::energy_allowance`, what the energy check let the
 ///   stabilisation give (penetrations under 0.1 mm, joint drift). A
 ///   constraint impulse that adds energy beyond it fails here.
@@ -324,15 +411,22 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
         ..Check::default()
     };
     let mut allowed = energy(&m, engine.state()).midpoint;
-    let kinetic = |v: &[(Vector3<f64>, Vector3<f64>)]| -> f64 {
+    // Kinetic energy with each body's world inertia `j` (a box's or
+    // capsule's turns with it: the step's bounds take the start's).
+    let kinetic = |v: &[(Vector3<f64>, Vector3<f64>)], j: &[nalgebra::Matrix3<f64>]| -> f64 {
         m.bodies
             .iter()
-            .zip(v)
-            .map(|(b, (v, w))| 0.5 * b.mass * v.norm_squared() + 0.5 * w.dot(&(b.inertia * w)))
+            .zip(v.iter().zip(j))
+            .map(|(b, ((v, w), j))| 0.5 * b.mass * v.norm_squared() + 0.5 * w.dot(&(j * w)))
             .sum()
+    };
+    let world = |inertia: &nalgebra::Matrix3<f64>, q: &nalgebra::UnitQuaternion<f64>| {
+        let r = q.to_rotation_matrix();
+        r.matrix() * inertia * r.matrix().transpose()
     };
     let mut free = Vec::new();
     let mut now = Vec::new();
+    let (mut j_start, mut j_inv, mut j_end) = (Vec::new(), Vec::new(), Vec::new());
     for _ in 0..steps {
         let before = energy(&m, engine.state()).midpoint;
         engine.prepare();
@@ -341,13 +435,25 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
             out.projection_energy += projected;
             allowed += projected;
         }
-        // The free motion of this step, from the state the step starts at.
+        // The free motion of this step, from the state the step starts at,
+        // with the gyroscopic term `-h w x J w` (none for a sphere), as
+        // `applied::free_velocity` has it.
+        j_start.clear();
+        j_inv.clear();
+        for (b, s) in m.bodies.iter().zip(&engine.state().bodies) {
+            j_start.push(world(&b.inertia, &s.q));
+            j_inv.push(world(&b.inv_inertia, &s.q));
+        }
         free.clear();
         free.extend(
             m.bodies
                 .iter()
                 .zip(&engine.state().bodies)
-                .map(|(b, s)| (s.v + h * (g + b.force * b.inv_mass), s.w)),
+                .enumerate()
+                .map(|(i, (b, s))| {
+                    let gyro = -h * s.w.cross(&(j_start[i] * s.w));
+                    (s.v + h * (g + b.force * b.inv_mass), s.w + j_inv[i] * gyro)
+                }),
         );
         for j in &m.joints {
             use crate::engine::Attachment;
@@ -362,9 +468,9 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
                     match at {
                         Some(at) => {
                             free[i].0 += p * b.inv_mass;
-                            free[i].1 += b.inv_inertia * (at - s.x).cross(&p);
+                            free[i].1 += j_inv[i] * (at - s.x).cross(&p);
                         }
-                        None => free[i].1 += b.inv_inertia * p,
+                        None => free[i].1 += j_inv[i] * p,
                     }
                 }
             }
@@ -376,8 +482,9 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
                 .iter()
                 .map(|s| (s.v, s.w))
                 .collect::<Vec<_>>(),
+            &j_start,
         );
-        let k_free = kinetic(&free);
+        let k_free = kinetic(&free, &j_start);
         // The inputs' part of the free motion's kinetic change: all of it
         // but gravity's work `h m g . v + h^2 m |g|^2 / 2`, which the
         // midpoint energy's potential balances exactly.
@@ -418,7 +525,7 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
                 Vector3::new(c[3], c[4], c[5]),
             )
         }));
-        let k_end = kinetic(&now);
+        let k_end = kinetic(&now, &j_start);
         let tol = 1e-12 * (k_free.abs() + allowed.abs() + 1.0);
         let bound = k_free + r.energy_allowance;
         out.kinetic = out.kinetic.max(k_end - bound - tol);
@@ -444,12 +551,27 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
             .zip(&now)
             .enumerate()
             .filter(|&(i, _)| asleep(engine.state(), i))
-            .map(|(_, (b, (v, w)))| {
-                let k = 0.5 * b.mass * v.norm_squared() + 0.5 * w.dot(&(b.inertia * w));
+            .map(|(i, (b, (v, w)))| {
+                let j = world(&b.inertia, &engine.state().bodies[i].q);
+                let k = 0.5 * b.mass * v.norm_squared() + 0.5 * w.dot(&(j * w));
                 (0.5 * h * b.mass * (-g).dot(v) - k).max(0.0)
             })
             .sum();
-        allowed += k_in.max(0.0) + r.energy_allowance + support + put_to_sleep;
+        // The position update turns a box's or capsule's inertia under its
+        // new angular velocity: the midpoint energy measures `w' . J(q')
+        // w' / 2` where the step's bounds had `J(q)`. That change is the
+        // explicit rotation update's own (a free tumbling body's energy
+        // is not kept exactly); its positive part is added. Zero for a
+        // sphere.
+        j_end.clear();
+        j_end.extend(
+            m.bodies
+                .iter()
+                .zip(&engine.state().bodies)
+                .map(|(b, s)| world(&b.inertia, &s.q)),
+        );
+        let turned = (kinetic(&now, &j_end) - k_end).max(0.0);
+        allowed += k_in.max(0.0) + r.energy_allowance + support + put_to_sleep + turned;
         out.energy = out.energy.max(r.energy.midpoint - allowed - tol);
     }
     Ok(out)

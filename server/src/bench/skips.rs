@@ -10,6 +10,18 @@ use cosim_shared::{Scene, SolverChoice};
 use std::fmt::Write as _;
 
 const FRICTIONLESS: &str = include_str!("../../../examples/scenes/frictionless.toml");
+/// Two boxes stacked on a floor, the upper sliding, and a capsule rolling
+/// into them: supports on several vertices and ends, faces clipped
+/// between boxes (a small scene: the full LCP of shapes.toml holds 930
+/// unknowns).
+const STACK: &str = "[sim]\nname = \"stack\"\ndt = 0.001\nduration = 2.0\nfriction_directions = 8\nsolver = \"lemke\"\n\
+[[body]]\nname = \"base\"\nhalf_extents = [0.12, 0.12, 0.06]\nmass = 2.0\nposition = [0.0, 0.0, 0.0605]\nfriction = 0.6\n\
+[[body]]\nname = \"top\"\nhalf_extents = [0.08, 0.05, 0.05]\nmass = 0.5\nposition = [0.02, 0.01, 0.175]\n\
+orientation = [0.9659258262890683, 0.0, 0.0, 0.25881904510252074]\nvelocity = [0.3, 0.0, 0.0]\nfriction = 0.6\n\
+[[body]]\nname = \"roller\"\nradius = 0.04\nhalf_length = 0.1\nmass = 0.6\nposition = [0.4, 0.0, 0.04]\n\
+orientation = [0.7071067811865476, 0.7071067811865476, 0.0, 0.0]\nvelocity = [-0.8, 0.0, 0.0]\n\
+angular_velocity = [0.0, -20.0, 0.0]\nfriction = 0.5\n\
+[[plane]]\nname = \"floor\"\nnormal = [0.0, 0.0, 1.0]\npoint = [0.0, 0.0, 0.0]\nfriction = 0.5\n";
 
 /// Medians of the stage timings (s) over a run, and the positions of every
 /// step.
@@ -196,15 +208,30 @@ pub fn measure(steps: u64) -> Result<Vec<Measured>, String> {
     let frictionless =
         Scene::parse(FRICTIONLESS, "frictionless.toml").map_err(|e| e.to_string())?;
     let gas = gas()?;
+    let shapes = Scene::parse(STACK, "stack").map_err(|e| e.to_string())?;
     // Each skip: its scene and solver, and how to switch it off.
     type Off = fn(&mut Params);
-    let cases: [(&'static str, &'static str, &Scene, SolverChoice, Off); 6] = [
+    let cases: [(&'static str, &'static str, &Scene, SolverChoice, Off); 8] = [
         (
             "broad phase (sphere pairs within reach)",
             "gas of 64 spheres, Lemke",
             &gas,
             SolverChoice::Lemke,
             |p| p.skips.broad_phase = false,
+        ),
+        (
+            "broad phase (boxes and capsules: bounding spheres)",
+            "stack of boxes, Lemke",
+            &shapes,
+            SolverChoice::Lemke,
+            |p| p.skips.broad_phase = false,
+        ),
+        (
+            "pruning (boxes and capsules)",
+            "stack of boxes, Lemke",
+            &shapes,
+            SolverChoice::Lemke,
+            |p| p.full = true,
         ),
         (
             "pruning (contacts that cannot close)",

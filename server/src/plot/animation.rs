@@ -114,7 +114,7 @@ impl Camera {
             Vector3::repeat(f64::NEG_INFINITY),
         );
         for (b, track) in model.bodies.iter().zip(&run.bodies) {
-            let Shape::Sphere { radius } = b.shape;
+            let radius = b.shape.bounding_radius();
             for r in &track.rows {
                 let x = Vector3::new(r[0], r[1], r[2]);
                 lo = lo.inf(&(x - Vector3::repeat(radius)));
@@ -187,10 +187,55 @@ pub fn frames_at(run: &RunData, fps: f64) -> (Vec<usize>, u32) {
     (out, (interval * 1000.0).round() as u32)
 }
 
-/// World position of the body-fixed marker of body `b` in state row `r`.
-pub fn marker(radius: f64, r: &[f64; 13]) -> Vector3<f64> {
+/// World position of the body-fixed marker of a body of shape `shape` in
+/// state row `r`: on its x axis, inside a sphere's or capsule's surface
+/// (0.8 of the radius), on a box's +x face.
+pub fn marker(shape: &Shape, r: &[f64; 13]) -> Vector3<f64> {
     let q = UnitQuaternion::from_quaternion(Quaternion::new(r[3], r[4], r[5], r[6]));
-    Vector3::new(r[0], r[1], r[2]) + q.transform_vector(&Vector3::x()) * (0.8 * radius)
+    let reach = match *shape {
+        Shape::Sphere { radius } | Shape::Capsule { radius, .. } => 0.8 * radius,
+        Shape::Box { half } => half.x,
+    };
+    Vector3::new(r[0], r[1], r[2]) + q.transform_vector(&Vector3::x()) * reach
+}
+
+/// A body's size on screen (pixels) for its shadow, its dot and its
+/// name's place: a sphere's or capsule's radius, a box's smallest half
+/// extent.
+fn screen_radius(shape: &Shape, cam: &Camera) -> i32 {
+    let r = match *shape {
+        Shape::Sphere { radius } | Shape::Capsule { radius, .. } => radius,
+        Shape::Box { half } => half.min(),
+    };
+    (r * cam.scale).round().max(2.0) as i32
+}
+
+/// A shaded ball of radius `radius` (m) about `c` with a highlight towards
+/// the upper left: a sphere, or a capsule's end.
+fn draw_ball<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    cam: &Camera,
+    c: &Vector3<f64>,
+    radius: f64,
+    base: RGBColor,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let (x, y) = cam.project(c);
+    let (x, y) = (x.round() as i32, y.round() as i32);
+    let rp = (radius * cam.scale).round().max(2.0) as i32;
+    area.draw(&Circle::new((x, y), rp, shade(base, 0.7).filled()))?;
+    area.draw(&Circle::new(
+        (x, y),
+        (rp as f64 * 0.9) as i32,
+        base.filled(),
+    ))?;
+    // Highlight towards the upper left, clear of the centre.
+    let off = (0.45 * rp as f64) as i32;
+    area.draw(&Circle::new(
+        (x - off, y - off),
+        (0.3 * rp as f64) as i32,
+        lighten(base, 0.45).filled(),
+    ))?;
+    Ok(())
 }
 
 /// Length of a force arrow per decade of newtons (pixels), beyond a first
@@ -366,6 +411,10 @@ fn draw_frame<DB: DrawingBackend>(
         let r = &run.bodies[b].rows[i];
         Vector3::new(r[0], r[1], r[2])
     };
+    let orientation = |b: usize| {
+        let r = &run.bodies[b].rows[i];
+        UnitQuaternion::from_quaternion(Quaternion::new(r[3], r[4], r[5], r[6]))
+    };
 
     // Planes: a square patch around the point nearest the view's target,
     // cut to the side of every other plane that the bodies are on (so a
@@ -448,15 +497,15 @@ fn draw_frame<DB: DrawingBackend>(
     }
     if let Some(f) = floor {
         for b in 0..model.bodies.len() {
-            let Shape::Sphere { radius } = model.bodies[b].shape;
+            let shape = &model.bodies[b].shape;
             let c = centre(b);
             let height = f.normal.dot(&c) - f.offset;
-            if height <= radius * 1.001 {
+            if height <= shape.extent(&orientation(b), &f.normal) * 1.001 {
                 continue;
             }
             // Along gravity to the plane.
             let foot = c - up * (height / f.normal.dot(&up));
-            let rp = (radius * cam.scale).round().max(2.0) as i32;
+            let rp = screen_radius(shape, cam);
             let (fx, fy) = pix(&foot);
             area.draw(&Circle::new(
                 (fx, fy),
@@ -472,34 +521,83 @@ fn draw_frame<DB: DrawingBackend>(
         }
     }
 
-    // Spheres, farthest first.
+    // Bodies, farthest first.
     let mut order: Vec<usize> = (0..model.bodies.len()).collect();
     order.sort_by(|&a, &b| cam.depth(&centre(b)).total_cmp(&cam.depth(&centre(a))));
     for b in order {
-        let Shape::Sphere { radius } = model.bodies[b].shape;
-        let c = centre(b);
-        let (x, y) = pix(&c);
-        let rp = (radius * cam.scale).round().max(2.0) as i32;
+        let shape = &model.bodies[b].shape;
+        let (c, q) = (centre(b), orientation(b));
         let base = color(b);
-        area.draw(&Circle::new((x, y), rp, shade(base, 0.7).filled()))
-            .map_err(e)?;
-        area.draw(&Circle::new(
-            (x, y),
-            (rp as f64 * 0.9) as i32,
-            base.filled(),
-        ))
-        .map_err(e)?;
-        // Highlight towards the upper left, clear of the centre.
-        let off = (0.45 * rp as f64) as i32;
-        area.draw(&Circle::new(
-            (x - off, y - off),
-            (0.3 * rp as f64) as i32,
-            lighten(base, 0.45).filled(),
-        ))
-        .map_err(e)?;
+        match *shape {
+            Shape::Sphere { radius } => draw_ball(area, cam, &c, radius, base).map_err(e)?,
+            Shape::Capsule {
+                radius,
+                half_length,
+            } => {
+                let axis = q.transform_vector(&Vector3::new(0.0, 0.0, half_length));
+                let ends = [c - axis, c + axis];
+                let (ex, ey) = (pix(&ends[0]), pix(&ends[1]));
+                // The body between the end balls: the segment's screen
+                // outline widened by the radius either side.
+                let (dx, dy) = ((ey.0 - ex.0) as f64, (ey.1 - ex.1) as f64);
+                let len = (dx * dx + dy * dy).sqrt().max(1e-9);
+                let rp = radius * cam.scale;
+                let (nx, ny) = (-dy / len * rp, dx / len * rp);
+                let side = |p: (i32, i32), s: f64| {
+                    (
+                        (p.0 as f64 + s * nx).round() as i32,
+                        (p.1 as f64 + s * ny).round() as i32,
+                    )
+                };
+                let far = usize::from(cam.depth(&ends[1]) > cam.depth(&ends[0]));
+                draw_ball(area, cam, &ends[far], radius, base).map_err(e)?;
+                let outline = vec![side(ex, 1.0), side(ey, 1.0), side(ey, -1.0), side(ex, -1.0)];
+                area.draw(&Polygon::new(outline.clone(), shade(base, 0.7).filled()))
+                    .map_err(e)?;
+                let inner: Vec<(i32, i32)> = [(ex, 0.9), (ey, 0.9), (ey, -0.9), (ex, -0.9)]
+                    .iter()
+                    .map(|&(p, s)| side(p, s))
+                    .collect();
+                area.draw(&Polygon::new(inner, base.filled())).map_err(e)?;
+                draw_ball(area, cam, &ends[1 - far], radius, base).map_err(e)?;
+            }
+            Shape::Box { half } => {
+                // The faces turned towards the camera (a convex body's do
+                // not overlap), each shaded by how squarely it faces it.
+                for (axis, sign) in (0..3).flat_map(|k| [(k, 1.0), (k, -1.0)]) {
+                    let mut n = Vector3::zeros();
+                    n[axis] = sign;
+                    let facing = q.transform_vector(&n).dot(&-cam.forward);
+                    if facing <= 1e-9 {
+                        continue;
+                    }
+                    let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                    let corner = |su: f64, sv: f64| {
+                        let mut p = n * half[axis];
+                        p[u] = su * half[u];
+                        p[v] = sv * half[v];
+                        pix(&(c + q.transform_vector(&p)))
+                    };
+                    let face = vec![
+                        corner(1.0, 1.0),
+                        corner(-1.0, 1.0),
+                        corner(-1.0, -1.0),
+                        corner(1.0, -1.0),
+                    ];
+                    let fill = shade(base, 0.6 + 0.4 * facing);
+                    area.draw(&Polygon::new(face.clone(), fill.filled()))
+                        .map_err(e)?;
+                    let mut edge = face;
+                    edge.push(edge[0]);
+                    area.draw(&PathElement::new(edge, shade(base, 0.45).stroke_width(1)))
+                        .map_err(e)?;
+                }
+            }
+        }
         // The body-fixed dot: solid on the near half, a ring on the far
         // half, so that a turn shows from every side.
-        let m = marker(radius, &run.bodies[b].rows[i]);
+        let rp = screen_radius(shape, cam);
+        let m = marker(shape, &run.bodies[b].rows[i]);
         let (mx, my) = pix(&m);
         let size = (0.14 * rp as f64).max(2.0) as i32;
         if cam.depth(&m) < cam.depth(&c) {
@@ -514,13 +612,14 @@ fn draw_frame<DB: DrawingBackend>(
             .map_err(e)?;
         }
     }
-    // Names after every sphere, so that a nearer sphere does not cover a
+    // Names after every body, so that a nearer body does not cover a
     // farther one's name.
     if model.bodies.len() <= 12 {
         for b in 0..model.bodies.len() {
-            let Shape::Sphere { radius } = model.bodies[b].shape;
             let (x, y) = pix(&centre(b));
-            let rp = (radius * cam.scale).round().max(2.0) as i32;
+            let rp = (model.bodies[b].shape.bounding_radius() * cam.scale)
+                .round()
+                .max(2.0) as i32;
             area.draw(&Text::new(
                 model.bodies[b].name.clone(),
                 (x + rp + 3, y - rp),
@@ -559,6 +658,8 @@ fn draw_frame<DB: DrawingBackend>(
     // pushes at the contact point, from outside the body it acts on.
     if i > 0 {
         if let Some(h) = run.h() {
+            let mut state = crate::engine::State::initial(model);
+            super::pose_state(run, i, &mut state);
             for ((kind, name), series) in &run.impulses {
                 let Some(Some(p)) = series.get(i - 1) else {
                     continue;
@@ -566,7 +667,7 @@ fn draw_frame<DB: DrawingBackend>(
                 if kind != "normal" {
                     continue;
                 }
-                let Some(at) = super::contact_point(model, run, i, name) else {
+                let Some(at) = super::contact_point(model, &state, name) else {
                     continue;
                 };
                 let f = Vector3::from(*p) / h;

@@ -5,12 +5,11 @@ pub mod data;
 pub mod figures;
 pub mod gif;
 
-use crate::engine::model::Shape;
-use crate::engine::Model;
-use cosim_foxglove::draw::Other;
+use crate::engine::collision::Counterpart;
+use crate::engine::{Model, State};
 use cosim_shared::Scene;
 use data::RunData;
-use nalgebra::Vector3;
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use plotters::prelude::RGBColor;
 use std::path::{Path, PathBuf};
 use std::sync::Once;
@@ -56,23 +55,37 @@ pub fn thick_path<DB: plotters::prelude::DrawingBackend>(
     Ok(())
 }
 
-/// Where contact `a/b` (a name of impulses.csv) touches in state `i`: on
-/// sphere a, towards the plane or sphere b. The animation's arrows and the
-/// MCAP recording's start there.
-pub fn contact_point(model: &Model, run: &RunData, i: usize, name: &str) -> Option<Vector3<f64>> {
-    let (a, b) = name.split_once('/')?;
+/// `state` posed as recorded state `i` (what the collision stage needs to
+/// place a contact; velocities and warm starts are left as they were).
+pub fn pose_state(run: &RunData, i: usize, state: &mut State) {
+    for (b, track) in state.bodies.iter_mut().zip(&run.bodies) {
+        let r = &track.rows[i];
+        b.x = Vector3::new(r[0], r[1], r[2]);
+        b.q = UnitQuaternion::from_quaternion(Quaternion::new(r[3], r[4], r[5], r[6]));
+    }
+}
+
+/// Where contact `name` (`a/b` or `a/b#k`, impulses.csv's
+/// `contact_label`) touches body a in `state` ([`pose_state`]): the
+/// engine's collision stage recomputed for that pair and feature. The
+/// animation's arrows and the MCAP recording's start there.
+pub fn contact_point(model: &Model, state: &State, name: &str) -> Option<Vector3<f64>> {
+    let (pair, feature) = match name.split_once('#') {
+        Some((pair, k)) => (pair, k.parse().ok()?),
+        None => (name, 0),
+    };
+    let (a, b) = pair.split_once('/')?;
     let index = |n: &str| model.bodies.iter().position(|x| x.name == n);
     let ia = index(a)?;
-    let Shape::Sphere { radius } = model.bodies[ia].shape;
-    let at = |k: usize| {
-        let r = &run.bodies[k].rows[i];
-        Vector3::new(r[0], r[1], r[2])
-    };
     let other = match index(b) {
-        Some(ib) => Other::Body(at(ib)),
-        None => Other::Plane(model.planes.iter().find(|p| p.name == b)?.normal),
+        Some(ib) => Counterpart::Body(ib),
+        None => Counterpart::Plane(model.planes.iter().position(|p| p.name == b)?),
     };
-    Some(cosim_foxglove::draw::contact_point(at(ia), radius, other))
+    if feature >= model.features || matches!(other, Counterpart::Body(ib) if ib <= ia) {
+        return None;
+    }
+    let id = model.contact_id(ia, other, feature);
+    crate::engine::collision::contact_point(model, state, id)
 }
 
 /// A log-log chart as the benchmarks draw them.

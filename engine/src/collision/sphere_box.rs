@@ -1,0 +1,37 @@
+use super::segment::{box_surface, Pose};
+use super::{Counterpart, Geometry};
+use nalgebra::Vector3;
+
+/// A ball (centre `c`, radius `r`; part of body A at lever offset
+/// `offset`, `sphere_sphere::lever`) against a box (body B): the box's
+/// surface point nearest the centre, the normal from it to the centre
+/// (for a centre inside the box, the nearest face's normal).
+#[allow(clippy::too_many_arguments)]
+pub fn ball_box(
+    a: usize,
+    c: Vector3<f64>,
+    r: f64,
+    offset: Option<Vector3<f64>>,
+    b: usize,
+    pose: &Pose,
+    h: &Vector3<f64>,
+    feature: usize,
+) -> Geometry {
+    let p = pose.local(&c);
+    let (s, n_local) = box_surface(&p, h);
+    let n = pose.q.transform_vector(&n_local);
+    // Signed distance of the centre from the surface along the normal.
+    let depth = (p - s).dot(&n_local);
+    let gap = depth - r;
+    let on_box = pose.point(&s);
+    Geometry {
+        a,
+        b: Counterpart::Body(b),
+        feature,
+        gap,
+        normal: n,
+        point: on_box + n * (0.5 * gap),
+        r_a: super::sphere_sphere::lever(offset, -n * r),
+        r_b: on_box - pose.x,
+    }
+}
