@@ -9,7 +9,7 @@
 //! `arm_controller` runs it in a process of its own;
 //! examples/python/arm_controller.py is the same law in Python.
 
-use crate::{ClientError, Controller, InputFrame, StateFrame, WaitMode};
+use crate::{ClientError, InputFrame, StateFrame};
 use std::time::Duration;
 
 /// The arm's joints with motors: shoulder, elbow (arm.toml's order).
@@ -37,21 +37,18 @@ pub struct Outcome {
 /// Joins server `name` and steers the arm to `target` (shoulder, elbow;
 /// rad) until the server shuts down.
 pub fn run(name: &str, target: [f64; 2], timeout: Duration) -> Result<Outcome, ClientError> {
-    let mut c = Controller::join(name, WaitMode::Block)?;
-    let mut out = Outcome::default();
-    loop {
-        let frame = match c.next_state(timeout) {
-            Ok(f) => f,
-            Err(ClientError::Shutdown) => return Ok(out),
-            Err(e) => return Err(e),
-        };
-        let (rates, angles) = rates(&frame, target);
-        out.angles = angles;
+    let mut angles_read = [f64::NAN; 2];
+    let steps = crate::answer_each(name, timeout, |frame| {
+        let (rates, angles) = rates(frame, target);
+        angles_read = angles;
         let mut input = InputFrame::default();
         for (&j, v) in JOINTS.iter().zip(rates) {
             input.push_motor(j as u32, v);
         }
-        c.send(input)?;
-        out.steps += 1;
-    }
+        input
+    })?;
+    Ok(Outcome {
+        steps,
+        angles: angles_read,
+    })
 }

@@ -13,6 +13,7 @@
 pub mod arm;
 pub mod cli;
 pub mod pd;
+pub mod push;
 pub mod view;
 
 pub use cosim_shared as shared;
@@ -941,6 +942,28 @@ impl Monitor {
 /// Calls `connect` again while it finds no server, for up to `patience`:
 /// for a client started beside a server that is still creating its
 /// services. Other errors end it at once.
+/// Joins server `name` as a controller and answers each state frame
+/// with the input `answer` makes of it, until the server shuts down;
+/// returns how many steps it answered. The lockstep loop of the example
+/// controllers (`arm`, `push`).
+pub fn answer_each(
+    name: &str,
+    timeout: Duration,
+    mut answer: impl FnMut(&StateFrame) -> InputFrame,
+) -> Result<u64, ClientError> {
+    let mut c = Controller::join(name, WaitMode::Block)?;
+    let mut steps = 0;
+    loop {
+        let frame = match c.next_state(timeout) {
+            Ok(f) => f,
+            Err(ClientError::Shutdown) => return Ok(steps),
+            Err(e) => return Err(e),
+        };
+        c.send(answer(&frame))?;
+        steps += 1;
+    }
+}
+
 pub fn when_up<T>(
     patience: Duration,
     mut connect: impl FnMut() -> Result<T, ClientError>,

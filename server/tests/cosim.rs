@@ -2486,7 +2486,7 @@ fn a_python_controller_sets_a_motor_target() {
 /// motors).
 const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/scenes/arm.toml");
 
-/// Issue 17, point 5 (with spheres for links; capsules to come): the arm
+/// Issue 17, point 5 (capsules for links): the arm
 /// steered to (0.6, -1.0) rad by its motors from a controller
 /// (`cosim_client::arm`, the law of the examples' `arm_controller` and of
 /// arm_controller.py) reaches its target: within the motors' bounds each
@@ -2526,6 +2526,65 @@ fn a_two_link_arm_reaches_its_target_under_a_motor_controller_rust_and_python() 
         printed_after(&text, "elbow "),
     );
     assert!((s - 0.6).abs() < 1e-5 && (e + 1.0).abs() < 1e-5, "{text}");
+}
+
+/// The shipped push scene: a 2 kg box on a floor with friction.
+const PUSH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/scenes/push.toml");
+
+/// Issue 17, point 5: a box pushed across the floor by body impulses from
+/// a controller (`cosim_client::push`, the law of the examples'
+/// `push_controller` and of push_controller.py) stops at its target: the
+/// servo asks for `k (x* - x)` (k = 5/s, at most 0.5 m/s), friction holds
+/// the box once the impulse falls below `mu m g h`, within `mu g h / k`
+/// = 0.8 mm of the target, and the box neither lifts nor turns much (its
+/// friction is spread over an indeterminate support). The Rust and the
+/// Python controller alike.
+#[test]
+fn a_box_pushed_by_body_impulses_stops_at_its_target_rust_and_python() {
+    let target = [0.5, 0.2];
+    const ARGS: [&str; 7] = [
+        PUSH,
+        "--controllers",
+        "1",
+        "--steps",
+        "3000",
+        "--deadline-ms",
+        "5000",
+    ];
+    let within = 0.4 * 9.81 * 1e-3 / 5.0 + 1e-6;
+    let (server, dir, name) = serve_test("push-rust", &ARGS);
+    let out = cosim_client::push::run(&name, target, Duration::from_secs(30)).expect("push");
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    assert!(out.steps >= 2999, "{out:?}");
+    let miss =
+        ((out.position[0] - target[0]).powi(2) + (out.position[1] - target[1]).powi(2)).sqrt();
+    assert!(miss < within, "{out:?}: {miss} m from the target");
+    assert!((out.position[2] - 0.05).abs() < 1e-4, "{out:?}");
+    // The last state's orientation, from the server's states.csv: a turn
+    // about the vertical of less than 0.05 rad.
+    let states = std::fs::read_to_string(dir.path().join("states.csv")).unwrap();
+    let last = states
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .collect::<Vec<_>>();
+    let qw: f64 = last[6].parse().unwrap();
+    let turned = 2.0 * qw.abs().min(1.0).acos();
+    eprintln!("Rust: {miss:e} m from the target, turned {turned:e} rad");
+    assert!(turned < 0.05, "turned: {last:?}");
+    let (server, _dir, name) = serve_test("push-python", &ARGS);
+    let text = python_example(
+        "push_controller.py",
+        &["--name", &name, "--x", "0.5", "--y", "0.2"],
+    );
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    let (x, y) = (printed_after(&text, "x "), printed_after(&text, "y "));
+    let miss = ((x - target[0]).powi(2) + (y - target[1]).powi(2)).sqrt();
+    eprintln!("Python: {miss:e} m from the target");
+    assert!(miss < within, "{text}");
 }
 
 /// The live view serves each hinge's and slider's coordinate on

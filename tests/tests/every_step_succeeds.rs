@@ -9,7 +9,7 @@ use cosim_server::engine::{Engine, LadderCounts, Model, Turning};
 use cosim_shared::{Scene, SolverChoice};
 use cosim_tests::shipped_scene;
 
-const SHIPPED: [&str; 11] = [
+const SHIPPED: [&str; 12] = [
     "reference.toml",
     "friction.toml",
     "frictionless.toml",
@@ -21,6 +21,7 @@ const SHIPPED: [&str; 11] = [
     "limits.toml",
     "arm.toml",
     "shapes.toml",
+    "push.toml",
 ];
 
 /// Steps `steps` times; panics on a failed step or, with Lemke asked for,

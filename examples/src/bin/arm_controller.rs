@@ -8,16 +8,9 @@
 //! cargo run --release -p cosim-examples --bin arm_controller -- --name lab
 //! ```
 
+use cosim_examples::arg;
 use std::process::ExitCode;
 use std::time::Duration;
-
-fn arg(args: &[String], flag: &str, default: &str) -> String {
-    args.iter()
-        .position(|a| a == flag)
-        .and_then(|i| args.get(i + 1))
-        .cloned()
-        .unwrap_or_else(|| default.to_string())
-}
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().collect();
