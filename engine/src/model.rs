@@ -465,7 +465,12 @@ impl Model {
             .iter()
             .map(|b| {
                 let shape = Shape::from_desc(b.shape());
-                let inertia = shape.inertia(b.mass);
+                let inertia = match b.inertia {
+                    Some([xx, yy, zz, xy, xz, yz]) => {
+                        Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz)
+                    }
+                    None => shape.inertia(b.mass),
+                };
                 Body {
                     name: b.name.clone(),
                     shape,

@@ -11,3 +11,4 @@ pub mod output;
 pub mod plot;
 pub mod scenes;
 pub mod serve;
+pub mod urdf;

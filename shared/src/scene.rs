@@ -325,6 +325,11 @@ pub struct BodyDesc {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub half_extents: Option<[f64; 3]>,
     pub mass: f64,
+    /// `[ixx, iyy, izz, ixy, ixz, iyz]` about the centre of mass in the
+    /// body's frame (kg m^2), as URDF's `<inertia>`; absent: the shape's
+    /// at uniform density.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inertia: Option<[f64; 6]>,
     pub position: [f64; 3],
     /// Unit quaternion, scalar first.
     #[serde(default = "identity_quaternion")]
@@ -398,6 +403,7 @@ impl BodyDesc {
             half_length: None,
             half_extents: None,
             mass,
+            inertia: None,
             position,
             orientation: identity_quaternion(),
             velocity: [0.0; 3],
@@ -766,6 +772,25 @@ impl Scene {
                 }
             }
             positive(b.mass).map_err(|m| err(f("mass"), m))?;
+            if let Some(j) = b.inertia {
+                // Positive definite: the leading minors of the symmetric
+                // matrix are positive (Sylvester).
+                let [xx, yy, zz, xy, xz, yz] = j;
+                let minors = [
+                    xx,
+                    xx * yy - xy * xy,
+                    xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz),
+                ];
+                if !j.iter().all(|x| x.is_finite()) || minors.iter().any(|&m| m <= 0.0) {
+                    return Err(err(
+                        f("inertia"),
+                        format!(
+                            "= {j:?}: [ixx, iyy, izz, ixy, ixz, iyz] must be finite and \
+                             positive definite"
+                        ),
+                    ));
+                }
+            }
             finite3(&b.position).map_err(|m| err(f("position"), m))?;
             finite3(&b.velocity).map_err(|m| err(f("velocity"), m))?;
             finite3(&b.angular_velocity).map_err(|m| err(f("angular_velocity"), m))?;

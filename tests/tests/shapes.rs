@@ -253,7 +253,8 @@ fn a_capsule_rolls_down_an_incline_without_slipping() {
 }
 
 /// A body's shape fields are checked and named: exactly one shape
-/// (radius; radius and half_length; half_extents), every size positive.
+/// (radius; radius and half_length; half_extents), every size positive;
+/// an explicit inertia positive definite.
 #[test]
 fn a_bodys_shape_is_checked_and_named() {
     let base = sim(1e-3, 10, [0.0, 0.0, -G]);
@@ -270,6 +271,10 @@ fn a_bodys_shape_is_checked_and_named() {
         (
             "radius = 0.1\nhalf_length = -0.2",
             "body \"b\".half_length = -0.2",
+        ),
+        (
+            "radius = 0.1\ninertia = [1.0, 1.0, 1.0, 2.0, 0.0, 0.0]",
+            "body \"b\".inertia = [1.0, 1.0, 1.0, 2.0, 0.0, 0.0]: [ixx, iyy, izz, ixy, ixz, iyz] must be finite and positive definite",
         ),
         (
             "half_extents = [0.1, 0.0, 0.1]",

@@ -13,6 +13,8 @@ use std::time::Instant;
 /// Loads the scene and applies the command-line overrides, validating both.
 pub fn load(args: &RunArgs) -> Result<Scene, SceneError> {
     let mut scene = match &args.scene {
+        // A URDF robot (`.urdf`) is read as a scene of its own (urdf.rs).
+        Some(path) if path.extension().is_some_and(|e| e == "urdf") => crate::urdf::load(path)?,
         Some(path) => Scene::load(path)?,
         None => crate::scenes::reference()?,
     };
