@@ -100,7 +100,8 @@ fn the_urdf_arm_runs_ten_times_its_duration_with_each_solver() {
 }
 
 /// Outside the subset, named: a mesh, a floating joint, a collision away
-/// from the centre of mass, two collisions, two roots, an unknown link.
+/// from the centre of mass, two collisions, two roots, a mimic joint, an
+/// unknown link.
 #[test]
 fn what_lies_outside_the_subset_is_named() {
     let arm = arm_text();
@@ -138,6 +139,13 @@ fn what_lies_outside_the_subset_is_named() {
                 r#"<link name="world"/><link name="loose"/>"#,
             ),
             "robot: has 2 root links",
+        ),
+        (
+            arm.replace(
+                r#"<limit lower="-2.5" upper="2.5" effort="8" velocity="3"/>"#,
+                r#"<limit lower="-2.5" upper="2.5" effort="8" velocity="3"/><mimic joint="shoulder"/>"#,
+            ),
+            r#"joint "elbow".mimic = "shoulder": outside the subset"#,
         ),
         (
             arm.replace(r#"<parent link="upper"/>"#, r#"<parent link="uper"/>"#),
