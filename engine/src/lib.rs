@@ -265,18 +265,10 @@ impl Workspace {
             return false;
         }
         let mut grown = false;
-        let at = |nu: &[f64], k: usize| Vector3::new(nu[k], nu[k + 1], nu[k + 2]).norm();
         for (i, r) in self.reach.iter_mut().enumerate() {
-            // A box's or capsule's surface moves with its spin too
-            // (`Shape::spin_reach`; none for a sphere).
-            let spin = model.bodies[i].shape.spin_reach();
-            let b = &state.bodies[i];
             let speed = match speeds {
-                Speeds::Free => {
-                    b.v.norm().max(at(&self.nu_free, 6 * i))
-                        + b.w.norm().max(at(&self.nu_free, 6 * i + 3)) * spin
-                }
-                Speeds::New => at(&self.nu, 6 * i) + at(&self.nu, 6 * i + 3) * spin,
+                Speeds::Free => prune::surface_speed(model, i, Some(state), &self.nu_free),
+                Speeds::New => prune::surface_speed(model, i, None, &self.nu),
             };
             let need = p.h * speed;
             if need > *r {

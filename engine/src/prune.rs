@@ -27,19 +27,28 @@ use super::rows::Row;
 use super::state::State;
 use nalgebra::Vector3;
 
+/// The largest speed (m/s) of body `i`'s surface that the velocities `nu`
+/// (6 per body) and, where given, the start state's allow over the step:
+/// linear, plus for a box or capsule its spin times its reach
+/// (`Shape::spin_reach`; the gap of a sphere depends on its centre only,
+/// so spin does not enter). The pruning's bound, and the broad phase's
+/// (`Workspace::widen`).
+pub fn surface_speed(model: &Model, i: usize, start: Option<&State>, nu: &[f64]) -> f64 {
+    let at = |k: usize| Vector3::new(nu[k], nu[k + 1], nu[k + 2]).norm();
+    let (mut linear, mut spin) = (at(6 * i), at(6 * i + 3));
+    if let Some(s) = start {
+        let b = &s.bodies[i];
+        (linear, spin) = (b.v.norm().max(linear), b.w.norm().max(spin));
+    }
+    linear + spin * model.bodies[i].shape.spin_reach()
+}
+
 /// Marks the contacts that enter the LCP before the first solve: all of
 /// them with `--full`, else those that could close within the step.
 pub fn select(contacts: &mut [Contact], model: &Model, state: &State, nu_free: &[f64]) {
     let p = &model.params;
-    // Largest speed of each body's surface over the step (start or free):
-    // linear, and for a box or capsule its spin times its reach (the gap
-    // of a sphere depends on its centre only, so spin does not enter).
-    let speed = |i: usize| {
-        let at = |k: usize| Vector3::new(nu_free[k], nu_free[k + 1], nu_free[k + 2]);
-        let b = &state.bodies[i];
-        let spin = b.w.norm().max(at(6 * i + 3).norm());
-        b.v.norm().max(at(6 * i).norm()) + spin * model.bodies[i].shape.spin_reach()
-    };
+    // Largest speed of each body's surface over the step (start or free).
+    let speed = |i: usize| surface_speed(model, i, Some(state), nu_free);
     for c in contacts.iter_mut() {
         if c.limit.is_some() {
             // A limit's gap is a coordinate's (rad or m): its own rate

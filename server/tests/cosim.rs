@@ -2482,6 +2482,20 @@ fn a_python_controller_sets_a_motor_target() {
     assert!((rate - 0.3).abs() < 1e-9, "{text}");
 }
 
+/// `serve` arguments for 3,000 steps of `scene` in lockstep with one
+/// controller (a generous deadline: the test machine is shared).
+fn three_seconds_with_one_controller(scene: &str) -> [&str; 7] {
+    [
+        scene,
+        "--controllers",
+        "1",
+        "--steps",
+        "3000",
+        "--deadline-ms",
+        "5000",
+    ]
+}
+
 /// The shipped arm (a two-link arm on hinges with limits and velocity
 /// motors).
 const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/scenes/arm.toml");
@@ -2497,16 +2511,8 @@ const ARM: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/scenes/arm.t
 #[test]
 fn a_two_link_arm_reaches_its_target_under_a_motor_controller_rust_and_python() {
     let target = [0.6, -1.0];
-    const ARGS: [&str; 7] = [
-        ARM,
-        "--controllers",
-        "1",
-        "--steps",
-        "3000",
-        "--deadline-ms",
-        "5000",
-    ];
-    let (server, _dir, name) = serve_test("arm-rust", &ARGS);
+    let args = three_seconds_with_one_controller(ARM);
+    let (server, _dir, name) = serve_test("arm-rust", &args);
     let out = cosim_client::arm::run(&name, target, Duration::from_secs(30)).expect("arm");
     let (status, stderr) = server.finish();
     assert!(status.success(), "{stderr}");
@@ -2514,7 +2520,7 @@ fn a_two_link_arm_reaches_its_target_under_a_motor_controller_rust_and_python() 
     for (q, t) in out.angles.iter().zip(target) {
         assert!((q - t).abs() < 1e-5, "{out:?}");
     }
-    let (server, _dir, name) = serve_test("arm-python", &ARGS);
+    let (server, _dir, name) = serve_test("arm-python", &args);
     let text = python_example(
         "arm_controller.py",
         &["--name", &name, "--shoulder", "0.6", "--elbow", "-1.0"],
@@ -2542,17 +2548,9 @@ const PUSH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/scenes/push
 #[test]
 fn a_box_pushed_by_body_impulses_stops_at_its_target_rust_and_python() {
     let target = [0.5, 0.2];
-    const ARGS: [&str; 7] = [
-        PUSH,
-        "--controllers",
-        "1",
-        "--steps",
-        "3000",
-        "--deadline-ms",
-        "5000",
-    ];
+    let args = three_seconds_with_one_controller(PUSH);
     let within = 0.4 * 9.81 * 1e-3 / 5.0 + 1e-6;
-    let (server, dir, name) = serve_test("push-rust", &ARGS);
+    let (server, dir, name) = serve_test("push-rust", &args);
     let out = cosim_client::push::run(&name, target, Duration::from_secs(30)).expect("push");
     let (status, stderr) = server.finish();
     assert!(status.success(), "{stderr}");
@@ -2574,7 +2572,7 @@ fn a_box_pushed_by_body_impulses_stops_at_its_target_rust_and_python() {
     let turned = 2.0 * qw.abs().min(1.0).acos();
     eprintln!("Rust: {miss:e} m from the target, turned {turned:e} rad");
     assert!(turned < 0.05, "turned: {last:?}");
-    let (server, _dir, name) = serve_test("push-python", &ARGS);
+    let (server, _dir, name) = serve_test("push-python", &args);
     let text = python_example(
         "push_controller.py",
         &["--name", &name, "--x", "0.5", "--y", "0.2"],

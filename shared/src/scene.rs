@@ -379,41 +379,7 @@ pub enum ShapeDesc {
     },
 }
 
-impl ShapeDesc {
-    /// The radius of the smallest sphere about the centre that holds the
-    /// shape (m).
-    pub fn bounding_radius(&self) -> f64 {
-        match *self {
-            ShapeDesc::Sphere { radius } => radius,
-            ShapeDesc::Capsule {
-                radius,
-                half_length,
-            } => radius + half_length,
-            ShapeDesc::Box { half_extents: h } => (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt(),
-        }
-    }
-}
-
 impl BodyDesc {
-    /// A sphere's description (what most scenes and tests write).
-    pub fn sphere(name: &str, radius: f64, mass: f64, position: [f64; 3]) -> BodyDesc {
-        BodyDesc {
-            name: name.to_string(),
-            radius: Some(radius),
-            half_length: None,
-            half_extents: None,
-            mass,
-            inertia: None,
-            position,
-            orientation: identity_quaternion(),
-            velocity: [0.0; 3],
-            angular_velocity: [0.0; 3],
-            friction: 0.0,
-            restitution: 0.0,
-            force: [0.0; 3],
-        }
-    }
-
     /// The body's shape, or which fields are missing or clash (the message
     /// of the error `validate` names the body's field with).
     pub fn shape_or_error(&self) -> Result<ShapeDesc, (&'static str, String)> {

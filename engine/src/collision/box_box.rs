@@ -46,17 +46,16 @@ pub fn box_box(
         let l = if l.dot(&d) < 0.0 { -l } else { l };
         (l.dot(&d) - extent(&aa, ha, &l) - extent(&ab, hb, &l), l)
     };
+    // The face axis of largest separation, ties to the first.
     let best_of = |ax: &[Vector3<f64>; 3]| {
-        (0..3)
-            .map(|i| (sep(ax[i]), i))
-            .fold(
-                None,
-                |best: Option<((f64, Vector3<f64>), usize)>, x| match best {
-                    Some(b) if b.0 .0 >= x.0 .0 => Some(b),
-                    _ => Some(x),
-                },
-            )
-            .expect("three axes")
+        let mut best = (sep(ax[0]), 0);
+        for (i, a) in ax.iter().enumerate().skip(1) {
+            let s = sep(*a);
+            if s.0 > best.0 .0 {
+                best = (s, i);
+            }
+        }
+        best
     };
     let ((s_a, l_a), i_a) = best_of(&aa);
     let ((s_b, l_b), i_b) = best_of(&ab);

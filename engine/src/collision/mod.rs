@@ -167,35 +167,31 @@ pub fn body_pair(
     out: &mut Vec<Geometry>,
 ) {
     use Shape::{Box, Capsule, Sphere};
-    let (pi, pj) = (pose(state, i), pose(state, j));
-    let (si, sj) = (model.bodies[i].shape, model.bodies[j].shape);
-    let start = out.len();
-    let mut one = |g: Geometry| {
-        if g.gap <= within {
-            out.push(g);
-        }
+    // Each pair's file takes its shapes in one order (sphere, capsule,
+    // box): a pair in the other order is computed as (j, i) and flipped.
+    let rank = |s: &Shape| match s {
+        Sphere { .. } => 0,
+        Capsule { .. } => 1,
+        Box { .. } => 2,
     };
-    // Each pair's file takes its shapes in one order; the other order is
-    // computed as (j, i) and flipped below.
-    let flip = match (si, sj) {
+    let (si, sj) = (model.bodies[i].shape, model.bodies[j].shape);
+    let flip = rank(&si) > rank(&sj);
+    let (a, b) = if flip { (j, i) } else { (i, j) };
+    let (pa, pb) = (pose(state, a), pose(state, b));
+    let (sa, sb) = (model.bodies[a].shape, model.bodies[b].shape);
+    let start = out.len();
+    match (sa, sb) {
         // Listed whatever `within` says: the broad phase's test for a pair
         // of spheres is this very gap (`broad.rs`), and repeating it in
         // another order of sums could drop a pair it kept by a rounding.
-        (Sphere { radius: ri }, Sphere { radius: rj }) => {
-            out.push(sphere_sphere(i, pi.x, ri, j, pj.x, rj));
-            false
+        (Sphere { radius: ra }, Sphere { radius: rb }) => {
+            out.push(sphere_sphere(a, pa.x, ra, b, pb.x, rb));
         }
         (Sphere { radius }, Box { half }) => {
-            one(sphere_box::ball_box(
-                i, pi.x, radius, None, j, &pj, &half, 0,
-            ));
-            false
-        }
-        (Box { half }, Sphere { radius }) => {
-            one(sphere_box::ball_box(
-                j, pj.x, radius, None, i, &pi, &half, 0,
-            ));
-            true
+            let g = sphere_box::ball_box(a, pa.x, radius, None, b, &pb, &half, 0);
+            if g.gap <= within {
+                out.push(g);
+            }
         }
         (
             Sphere { radius },
@@ -204,73 +200,36 @@ pub fn body_pair(
                 half_length,
             },
         ) => {
-            one(sphere_capsule::sphere_capsule(
-                i,
-                pi.x,
-                radius,
-                j,
-                &pj,
-                rc,
-                half_length,
-            ));
-            false
+            let g = sphere_capsule::sphere_capsule(a, pa.x, radius, b, &pb, rc, half_length);
+            if g.gap <= within {
+                out.push(g);
+            }
         }
         (
             Capsule {
-                radius: rc,
-                half_length,
-            },
-            Sphere { radius },
-        ) => {
-            one(sphere_capsule::sphere_capsule(
-                j,
-                pj.x,
-                radius,
-                i,
-                &pi,
-                rc,
-                half_length,
-            ));
-            true
-        }
-        (
-            Capsule {
-                radius: ri,
-                half_length: li,
+                radius: ra,
+                half_length: la,
             },
             Capsule {
-                radius: rj,
-                half_length: lj,
+                radius: rb,
+                half_length: lb,
             },
-        ) => {
-            capsule_capsule::capsule_capsule(i, &pi, (ri, li), j, &pj, (rj, lj), within, out);
-            false
-        }
+        ) => capsule_capsule::capsule_capsule(a, &pa, (ra, la), b, &pb, (rb, lb), within, out),
         (
             Capsule {
                 radius,
                 half_length,
             },
             Box { half },
-        ) => {
-            capsule_box::capsule_box(i, &pi, (radius, half_length), j, &pj, &half, within, out);
-            false
+        ) => capsule_box::capsule_box(a, &pa, (radius, half_length), b, &pb, &half, within, out),
+        (Box { half: ha }, Box { half: hb }) => {
+            box_box::box_box(a, &pa, &ha, b, &pb, &hb, within, out)
         }
-        (
-            Box { half },
-            Capsule {
-                radius,
-                half_length,
-            },
-        ) => {
-            capsule_box::capsule_box(j, &pj, (radius, half_length), i, &pi, &half, within, out);
-            true
+        // Ordered by rank above.
+        (Capsule { .. } | Box { .. }, Sphere { .. }) | (Box { .. }, Capsule { .. }) => {
+            unreachable!("a pair is taken in the rank's order")
         }
-        (Box { half: hi }, Box { half: hj }) => {
-            box_box::box_box(i, &pi, &hi, j, &pj, &hj, within, out);
-            false
-        }
-    };
+    }
     if flip {
         for g in &mut out[start..] {
             *g = g.flipped();

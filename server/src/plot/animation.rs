@@ -552,7 +552,7 @@ fn draw_frame<DB: DrawingBackend>(
                 let far = usize::from(cam.depth(&ends[1]) > cam.depth(&ends[0]));
                 draw_ball(area, cam, &ends[far], radius, base).map_err(e)?;
                 let outline = vec![side(ex, 1.0), side(ey, 1.0), side(ey, -1.0), side(ex, -1.0)];
-                area.draw(&Polygon::new(outline.clone(), shade(base, 0.7).filled()))
+                area.draw(&Polygon::new(outline, shade(base, 0.7).filled()))
                     .map_err(e)?;
                 let inner: Vec<(i32, i32)> = [(ex, 0.9), (ey, 0.9), (ey, -0.9), (ex, -0.9)]
                     .iter()
