@@ -3,8 +3,10 @@
 Usage: python3 mujoco_case.py SCENE.toml OUT.bin LABELS INTEGRATOR
 
 Builds an MJCF model from our scene file the way a MuJoCo user would
-(spheres on free joints, spherical joints as nested bodies with ball joints,
-planes as plane geoms, MuJoCo's default solver and contact parameters),
+(bodies on free joints, spherical and revolute joints as nested bodies with
+ball and hinge joints, spheres, capsules and boxes as their geoms with the
+scene's inertia, planes as plane geoms, MuJoCo's default solver and contact
+parameters),
 steps it, and writes the trajectory as little-endian float64 records:
 t, then per body x(3) q(4, w first) v(3) w(3) in the world frame, then the
 normal force of each contact named in LABELS (comma-separated "a/b").
@@ -22,6 +24,56 @@ import tomllib
 import mujoco
 import numpy as np
 from mujoco import rollout
+
+
+def qmul(a, b):
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return [
+        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+    ]
+
+
+def qconj(q):
+    return [q[0], -q[1], -q[2], -q[3]]
+
+
+def rotate(q, v):
+    """v turned by the unit quaternion q ([w, x, y, z])."""
+    return qmul(qmul(q, [0.0] + list(v)), qconj(q))[1:]
+
+
+def unrotate(q, v):
+    """A world vector in the frame q: R(q)^T v."""
+    return rotate(qconj(q), v)
+
+
+IDENTITY = [1.0, 0.0, 0.0, 0.0]
+
+
+def orientation(b):
+    return b.get("orientation", IDENTITY)
+
+
+def geom_shape(b):
+    """MJCF type and size: a capsule along its local z as ours (radius,
+    half its segment), a box by its half extents."""
+    if "half_extents" in b:
+        e = b["half_extents"]
+        return "box", f"{e[0]} {e[1]} {e[2]}"
+    if "half_length" in b:
+        return "capsule", f'{b["radius"]} {b["half_length"]}'
+    return "sphere", f'{b["radius"]}'
+
+
+def rotational_inertia(b):
+    """A scalar for the velocity projection's weights."""
+    if "inertia" in b:
+        return sum(b["inertia"][0:3]) / 3.0
+    return 0.4 * b["mass"] * b["radius"] ** 2
 
 
 def mjcf(scene, integrator="Euler"):
@@ -64,22 +116,40 @@ def mjcf(scene, integrator="Euler"):
     else:
         sphere_bits, plane_bits = 'contype="1" conaffinity="2"', 'contype="2" conaffinity="1"'
 
-    def body_xml(name, origin):
+    def body_xml(name, origin, turn):
+        # MJCF nests frames: pose, joint anchor and axis in the parent's
+        # and the body's own frame.
         b = bodies[names.index(name)]
-        x = [b["position"][k] - origin[k] for k in range(3)]
-        out = f'<body name="{name}" pos="{x[0]} {x[1]} {x[2]}">'
+        q = orientation(b)
+        x = unrotate(turn, [b["position"][k] - origin[k] for k in range(3)])
+        r = qmul(qconj(turn), q)
+        out = f'<body name="{name}" pos="{x[0]} {x[1]} {x[2]}" quat="{r[0]} {r[1]} {r[2]} {r[3]}">'
         if name in parent:
             j = parent[name][1]
-            anchor = [j["anchor"][k] - b["position"][k] for k in range(3)]
-            out += f'<joint name="{j["name"]}" type="ball" pos="{anchor[0]} {anchor[1]} {anchor[2]}" damping="0" armature="0"/>'
+            anchor = unrotate(q, [j["anchor"][k] - b["position"][k] for k in range(3)])
+            kind = {"spherical": "ball", "revolute": "hinge"}[j.get("type", "spherical")]
+            axis = ""
+            if kind == "hinge":
+                a = unrotate(q, j["axis"])
+                axis = f'axis="{a[0]} {a[1]} {a[2]}"'
+            out += (
+                f'<joint name="{j["name"]}" type="{kind}" pos="{anchor[0]} {anchor[1]} {anchor[2]}" '
+                f'{axis} damping="0" armature="0"/>'
+            )
         else:
             out += "<freejoint/>"
+        mass = f'mass="{b["mass"]}"'
+        if "inertia" in b:
+            i = b["inertia"]
+            out += f'<inertial pos="0 0 0" mass="{b["mass"]}" fullinertia="{" ".join(str(v) for v in i)}"/>'
+            mass = ""
+        kind, size = geom_shape(b)
         out += (
-            f'<geom name="{name}" type="sphere" size="{b["radius"]}" mass="{b["mass"]}" '
+            f'<geom name="{name}" type="{kind}" size="{size}" {mass} '
             f'friction="{b.get("friction", 0.5)} 0 0" {condim(b)} {sphere_bits} {solref}/>'
         )
         for c, _ in children.get(name, []):
-            out += body_xml(c, b["position"])
+            out += body_xml(c, b["position"], q)
         return out + "</body>"
 
     world = ""
@@ -92,7 +162,7 @@ def mjcf(scene, integrator="Euler"):
         )
     for b in bodies:
         if b["name"] not in parent or parent[b["name"]][0] == "world":
-            world += body_xml(b["name"], [0.0, 0.0, 0.0])
+            world += body_xml(b["name"], [0.0, 0.0, 0.0], IDENTITY)
     pairs = ""
     if sphere_contacts:
         # MuJoCo filters parent-child contacts; our joined spheres collide.
@@ -128,8 +198,8 @@ def main():
             if m.jnt_type[jnt] == mujoco.mjtJoint.mjJNT_FREE:
                 qv = m.jnt_dofadr[jnt]
                 d.qvel[qv:qv + 3] = b.get("velocity", [0, 0, 0])
-                # free joint angular velocity is in the body frame (identity here)
-                d.qvel[qv + 3:qv + 6] = b.get("angular_velocity", [0, 0, 0])
+                # A free joint's angular velocity is in the body's frame.
+                d.qvel[qv + 3:qv + 6] = unrotate(orientation(b), b.get("angular_velocity", [0, 0, 0]))
             d.xfrc_applied[bid, 0:3] = b.get("force", [0, 0, 0])
         # Bodies on ball joints: MuJoCo's state is joint velocities, ours
         # body twists. Take the joint velocities closest to the scene's
@@ -146,7 +216,7 @@ def main():
                 mujoco.mj_jacBody(m, d, jp, jr, bid)
                 rows += [jp, jr]
                 target += list(b.get("velocity", [0, 0, 0])) + list(b.get("angular_velocity", [0, 0, 0]))
-                inertia = 0.4 * b["mass"] * b["radius"] ** 2
+                inertia = rotational_inertia(b)
                 weight += [b["mass"]] * 3 + [inertia] * 3
             jac = np.vstack(rows)
             w = np.sqrt(np.array(weight))[:, None]

@@ -105,7 +105,37 @@ fn quick_sweep_writes_csv_and_diagrams_with_the_expected_errors() {
     let (e4, m4) = get("S4", "lemke nd=8", 1e-3);
     assert!(e4 < 1e-2, "S4 energy drift {e4}");
     assert!(metric(&m4, "joint_error_m") < 1e-3, "S4: {m4}");
-    for case in ["S1", "S2", "S3", "S4", "S6", "REF"] {
+    // S7, the hinge chain of capsules (h = 1e-3): energy within 2 %,
+    // joints within 1 mm, axes kept (the hinge's rows hold them).
+    for s in ["lemke nd=8", "pgs tol=1e-6"] {
+        let (e7, m7) = get("S7", s, 1e-3);
+        assert!(e7 < 2e-2, "S7 {s}: energy drift {e7}");
+        assert!(metric(&m7, "joint_error_m") < 1e-3, "S7 {s}: {m7}");
+        assert!(metric(&m7, "axis_error_rad") < 1e-3, "S7 {s}: {m7}");
+    }
+    // S8, the box sliding to rest: each Euler step takes a h off the speed
+    // exactly, so the distance is the discrete sum (v0 h / 2 short of the
+    // continuous answer); the trapezoid update leaves only the last
+    // step's part (below a h^2); no pitch, no sink.
+    for h in [1e-2, 1e-3] {
+        let discrete = cosim_server::bench::cases::incline_discrete_distance(h);
+        let exact = cosim_server::bench::cases::incline_stop_distance();
+        for s in ["lemke nd=8", "pgs tol=1e-6"] {
+            let (e8, m8) = get("S8", s, h);
+            let d = metric(&m8, "distance_m");
+            assert!(
+                (d - discrete).abs() < 1e-9,
+                "S8 {s} h={h}: {d} not {discrete}"
+            );
+            assert!((e8 - (exact - discrete)).abs() < 1e-9, "S8 {s}: {e8}");
+            assert!(metric(&m8, "pitch_rad") < 1e-6, "S8 {s}: {m8}");
+            assert!(metric(&m8, "sink_m") < 1e-7, "S8 {s}: {m8}");
+        }
+        let (e8, _) = get("S8", "lemke nd=8 trapezoid", h);
+        let a = cosim_server::bench::cases::incline_deceleration();
+        assert!(e8 < a * h * h, "S8 trapezoid at h = {h}: {e8}");
+    }
+    for case in ["S1", "S2", "S3", "S4", "S6", "S7", "S8", "REF"] {
         let png = dir.join(format!("accuracy-{case}.png"));
         let img = image::open(&png).unwrap_or_else(|e| panic!("{}: {e}", png.display()));
         assert_eq!((img.width(), img.height()), (1000, 720));

@@ -24,7 +24,7 @@ struct Args {
     /// Two steps and two settings only.
     #[arg(long)]
     quick: bool,
-    /// Only these cases (S1, S2, S3, S4, S6, REF), comma-separated.
+    /// Only these cases (S1, S2, S3, S4, S6, S7, S8, REF), comma-separated.
     #[arg(long, value_delimiter = ',')]
     cases: Vec<String>,
     /// Python with the `mujoco` package (skipped when it does not import).

@@ -4,6 +4,8 @@
 
 use cosim_server::bench::accuracy::{no_figure, Point, Trajectory};
 use cosim_server::bench::cases::{corner_forces, CaseId, Pose, Sample, Scorer};
+use cosim_server::engine::Model;
+use cosim_shared::Scene;
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -37,6 +39,25 @@ fn field<'a>(json: &'a str, key: &str) -> Option<&'a str> {
     Some(rest[..end].trim().trim_matches('"'))
 }
 
+/// The scene with each body's inertia written out as our engine takes it,
+/// so that MuJoCo's bodies have ours and not its own geoms' (its capsule's
+/// need not be the same solid).
+fn with_inertia(scene: &Scene) -> Scene {
+    let mut out = scene.clone();
+    for (b, body) in out.bodies.iter_mut().zip(Model::from_scene(scene).bodies) {
+        let j = body.inertia;
+        b.inertia = Some([
+            j[(0, 0)],
+            j[(1, 1)],
+            j[(2, 2)],
+            j[(0, 1)],
+            j[(0, 2)],
+            j[(1, 2)],
+        ]);
+    }
+    out
+}
+
 pub fn run(
     python: &str,
     integrator: &str,
@@ -49,7 +70,7 @@ pub fn run(
     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
     let toml: PathBuf = dir.join(format!("{}.toml", case.key()));
     let bin: PathBuf = dir.join(format!("{}.bin", case.key()));
-    std::fs::write(&toml, scene.to_toml()).map_err(|e| e.to_string())?;
+    std::fs::write(&toml, with_inertia(&scene).to_toml()).map_err(|e| e.to_string())?;
     let labels: Vec<&str> = if case == CaseId::Corner {
         corner_forces().iter().map(|(l, _)| *l).collect()
     } else {

@@ -364,19 +364,6 @@ pub fn figures(
     Ok(vec![time, precision])
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn the_slope_of_a_power_law_is_its_exponent() {
-        let pts: Vec<(f64, f64)> = [100.0, 1000.0, 4000.0]
-            .iter()
-            .map(|&n: &f64| (n, 3.0 * n.powf(1.1)))
-            .collect();
-        assert!((super::slope(&pts).unwrap() - 1.1).abs() < 1e-12);
-        assert_eq!(super::slope(&pts[..1]), None);
-    }
-}
-
 /// The rows of a table that [`table`] wrote (`--pile-from`), to draw the
 /// figures again without running the piles.
 pub fn parse_table(text: &str) -> Result<Vec<Row>, String> {
@@ -413,4 +400,17 @@ pub fn parse_table(text: &str) -> Result<Vec<Row>, String> {
         return Err("no pile rows in the table".into());
     }
     Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_slope_of_a_power_law_is_its_exponent() {
+        let pts: Vec<(f64, f64)> = [100.0, 1000.0, 4000.0]
+            .iter()
+            .map(|&n: &f64| (n, 3.0 * n.powf(1.1)))
+            .collect();
+        assert!((super::slope(&pts).unwrap() - 1.1).abs() < 1e-12);
+        assert_eq!(super::slope(&pts[..1]), None);
+    }
 }

@@ -3,7 +3,7 @@
 
 use cosim_server::bench::accuracy::{median_run_time, no_figure, Point, Trajectory};
 use cosim_server::bench::cases::{CaseId, Pose, Sample, Scorer};
-use cosim_shared::{Scene, ShapeDesc};
+use cosim_shared::{JointKind, Scene, ShapeDesc};
 use rapier3d_f64::na::Unit;
 use rapier3d_f64::prelude::*;
 use std::time::Instant;
@@ -72,11 +72,11 @@ pub(crate) fn build(scene: &Scene, sleep: bool) -> World {
             ShapeDesc::Box { half_extents: h } => ColliderBuilder::cuboid(h[0], h[1], h[2]),
         }
         .mass(b.mass)
-            .friction(b.friction)
-            .restitution(b.restitution)
-            .friction_combine_rule(CoefficientCombineRule::Min)
-            .restitution_combine_rule(CoefficientCombineRule::Max)
-            .collision_groups(sphere_groups);
+        .friction(b.friction)
+        .restitution(b.restitution)
+        .friction_combine_rule(CoefficientCombineRule::Min)
+        .restitution_combine_rule(CoefficientCombineRule::Max)
+        .collision_groups(sphere_groups);
         let (h, ch) = world.insert(rb, c);
         world.bodies[h].add_force(vec3(b.force), true);
         bodies.push((h, ch));
@@ -94,13 +94,37 @@ pub(crate) fn build(scene: &Scene, sleep: bool) -> World {
             None => anchor,
         };
         let (a, b) = (find(&j.body_a), find(&j.body_b));
-        let joint = SphericalJointBuilder::new()
-            .local_anchor1(local(a))
-            .local_anchor2(local(b))
-            .contacts_enabled(true);
         let ha = a.map_or(ground, |i| bodies[i].0);
         let hb = b.map_or(ground, |i| bodies[i].0);
-        world.impulse_joints.insert(ha, hb, joint, true);
+        match (j.kind, j.axis) {
+            (JointKind::Revolute, Some(axis)) => {
+                // A hinge: Rapier's revolute axes locked, its free
+                // rotation about each body's local x set to our axis.
+                let axis = vec3(axis).normalize();
+                let turn = |i: Option<usize>| match i {
+                    Some(i) => {
+                        let q = scene.bodies[i].orientation;
+                        Rotation::from_xyzw(q[1], q[2], q[3], q[0]).inverse() * axis
+                    }
+                    None => axis,
+                };
+                let joint = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
+                    .local_anchor1(local(a))
+                    .local_anchor2(local(b))
+                    .local_axis1(turn(a))
+                    .local_axis2(turn(b))
+                    .contacts_enabled(j.collide);
+                world.impulse_joints.insert(ha, hb, joint, true);
+            }
+            (JointKind::Spherical, _) => {
+                let joint = SphericalJointBuilder::new()
+                    .local_anchor1(local(a))
+                    .local_anchor2(local(b))
+                    .contacts_enabled(j.collide);
+                world.impulse_joints.insert(ha, hb, joint, true);
+            }
+            (kind, _) => panic!("the peers' cases have no {kind:?} joint"),
+        }
         // Joint torque: +torque on body_b, -torque on body_a, held.
         let tau = vec3(j.torque);
         world.bodies[hb].add_torque(tau, true);

@@ -343,9 +343,9 @@ impl Sweep {
 fn relevant(case: CaseId, s: &Setting) -> bool {
     let friction = matches!(
         case,
-        CaseId::Rolling | CaseId::SlideToRoll | CaseId::Reference
+        CaseId::Rolling | CaseId::SlideToRoll | CaseId::BoxIncline | CaseId::Reference
     );
-    let contacts = case != CaseId::Chain;
+    let contacts = !matches!(case, CaseId::Chain | CaseId::HingeChain);
     (s.nd == 8 || friction)
         && (!s.full || contacts)
         && (s.cone == FrictionCone::Polyhedral || friction)
@@ -445,14 +445,29 @@ fn draw(
             curves.push(k);
         }
     }
-    for (i, (engine, setting)) in curves.iter().enumerate() {
+    // Our settings take the palette; the peers' curves dark tones of their
+    // own, so that no colour names two curves (the palette has ten).
+    const PEERS: [RGBColor; 4] = [
+        RGBColor(0, 0, 0),
+        RGBColor(125, 125, 125),
+        RGBColor(150, 0, 0),
+        RGBColor(0, 100, 0),
+    ];
+    let (mut ours, mut peers) = (0, 0);
+    for (engine, setting) in &curves {
         let mut line: Vec<(f64, f64)> = pts
             .iter()
             .filter(|p| &p.engine == engine && &p.setting == setting)
             .map(|p| (p.wall_per_sim_s, p.score.error.max(ERROR_FLOOR)))
             .collect();
         line.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let c = color(i);
+        let c = if engine == "ours" {
+            ours += 1;
+            color(ours - 1)
+        } else {
+            peers += 1;
+            PEERS[(peers - 1) % PEERS.len()]
+        };
         // One-pixel paths side by side, in the image's pixels: plotters
         // draws wider strokes wrongly in bitmaps (plotters issue 549).
         let pixels: Vec<(i32, i32)> = line.iter().map(|p| chart.backend_coord(p)).collect();

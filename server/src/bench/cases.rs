@@ -6,9 +6,11 @@
 //! peers package (`bench/peers`) are scored by this same code: one
 //! definition of "error" for everybody on the diagrams.
 
-use super::text::{force, joint, plane, sphere};
-use cosim_shared::{Scene, SceneError};
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use super::text::{capsule, cuboid, force, hinge, joint, plane, sphere};
+use crate::engine::Model;
+use cosim_shared::{JointKind, Scene, SceneError, ShapeDesc};
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+use std::f64::consts::FRAC_PI_4;
 
 pub const G: f64 = 9.81;
 
@@ -25,16 +27,22 @@ pub enum CaseId {
     Chain,
     /// S6: two spheres pushed into a corner, mu = 0: static equilibrium.
     Corner,
+    /// S7: five capsule links on hinges, a chain released horizontal.
+    HingeChain,
+    /// S8: a box sent down a 0.2 rad incline, mu = 0.5, slides to rest.
+    BoxIncline,
     /// The reference scene against a converged run.
     Reference,
 }
 
-pub const ALL: [CaseId; 6] = [
+pub const ALL: [CaseId; 8] = [
     CaseId::Rolling,
     CaseId::SlideToRoll,
     CaseId::Bounce,
     CaseId::Chain,
     CaseId::Corner,
+    CaseId::HingeChain,
+    CaseId::BoxIncline,
     CaseId::Reference,
 ];
 
@@ -49,6 +57,13 @@ const S4_LINKS: usize = 5;
 const S4_LINK: f64 = 0.3;
 const S4_R: f64 = 0.05;
 const S6_FORCE: f64 = 10.0;
+const S7_LINKS: usize = 5;
+const S7_LINK: f64 = 0.3;
+const S7_R: f64 = 0.03;
+const S8_INCLINE: f64 = 0.2;
+const S8_MU: f64 = 0.5;
+const S8_V0: f64 = 1.0;
+const S8_HALF: [f64; 3] = [0.1, 0.1, 0.05];
 /// Simulated seconds of the reference case: long enough for impacts
 /// between the spheres, the floor and a wall (0.09, 0.19 s), short enough
 /// that the chaotic trajectory still converges as h shrinks. Measured: the
@@ -70,6 +85,32 @@ pub fn slide_roll_time() -> f64 {
 /// S3: apex `e^2 h`.
 pub fn bounce_apex() -> f64 {
     S3_E * S3_E * S3_DROP
+}
+/// S8: the box decelerates at `a = g (mu cos - sin)` while it slides, so
+/// it stops after `v0^2 / (2 a)` (0.17493 m), at `v0 / a` (0.350 s).
+pub fn incline_deceleration() -> f64 {
+    G * (S8_MU * S8_INCLINE.cos() - S8_INCLINE.sin())
+}
+pub fn incline_stop_distance() -> f64 {
+    S8_V0 * S8_V0 / (2.0 * incline_deceleration())
+}
+/// S8: what semi-implicit Euler travels at step `h`: the speed falls by
+/// `a h` each step until the step that would reverse it, and each step
+/// moves `h` times the new speed: `h sum_{k=1..K} (v0 - k a h)`,
+/// `K = floor(v0 / (a h))`. About `v0 h / 2` short of the continuous
+/// answer.
+pub fn incline_discrete_distance(h: f64) -> f64 {
+    let a = incline_deceleration();
+    let stop = (S8_V0 / (a * h)).floor() as u64;
+    (1..=stop).map(|k| h * (S8_V0 - k as f64 * a * h)).sum()
+}
+/// S8's incline: its unit normal and the direction down its slope.
+fn incline_frame() -> (Vector3<f64>, Vector3<f64>) {
+    let th = S8_INCLINE;
+    (
+        Vector3::new(th.sin(), 0.0, th.cos()),
+        Vector3::new(th.cos(), 0.0, -th.sin()),
+    )
 }
 /// S6: the normal force of each contact at static equilibrium. With mu = 0
 /// the forces are unique: the 10 N push (-x, -y)/sqrt 2 on B is carried by
@@ -96,6 +137,8 @@ impl CaseId {
             CaseId::Bounce => "S3",
             CaseId::Chain => "S4",
             CaseId::Corner => "S6",
+            CaseId::HingeChain => "S7",
+            CaseId::BoxIncline => "S8",
             CaseId::Reference => "REF",
         }
     }
@@ -107,6 +150,8 @@ impl CaseId {
             CaseId::Bounce => "S3 bounce, first apex",
             CaseId::Chain => "S4 chain of 5, energy drift over 10 s",
             CaseId::Corner => "S6 corner, contact forces against equilibrium",
+            CaseId::HingeChain => "S7 hinge chain of 5 capsules, energy drift over 10 s",
+            CaseId::BoxIncline => "S8 box sliding to rest on a 0.2 rad incline, distance",
             CaseId::Reference => "reference scene, positions against a converged run",
         }
     }
@@ -119,6 +164,8 @@ impl CaseId {
             CaseId::Bounce => "|apex - 0.25 m| (m)",
             CaseId::Chain => "|E(10 s) - E(0)| / sum m g L",
             CaseId::Corner => "max |F - F_eq| over the last 0.5 s (N)",
+            CaseId::HingeChain => "|E(10 s) - E(0)| / sum m g L",
+            CaseId::BoxIncline => "|distance - 0.17493 m| (m)",
             CaseId::Reference => "max position error over 0.3 s (m)",
         }
     }
@@ -130,8 +177,12 @@ impl CaseId {
     /// Simulated seconds.
     pub fn duration(self) -> f64 {
         match self {
-            CaseId::Rolling | CaseId::SlideToRoll | CaseId::Bounce | CaseId::Corner => 1.0,
-            CaseId::Chain => 10.0,
+            CaseId::Rolling
+            | CaseId::SlideToRoll
+            | CaseId::Bounce
+            | CaseId::Corner
+            | CaseId::BoxIncline => 1.0,
+            CaseId::Chain | CaseId::HingeChain => 10.0,
             CaseId::Reference => REFERENCE_SECONDS,
         }
     }
@@ -196,11 +247,7 @@ impl CaseId {
                     );
                 }
                 for i in 0..S4_LINKS {
-                    let a = if i == 0 {
-                        "world".to_string()
-                    } else {
-                        format!("s{}", i - 1)
-                    };
+                    let a = chain_parent("s", i);
                     s += &joint(
                         &format!("j{i}"),
                         &a,
@@ -219,8 +266,66 @@ impl CaseId {
                     + &plane("wall_x", [1.0, 0.0, 0.0], [0.0; 3], 0.0, 0.0)
                     + &plane("wall_y", [0.0, 1.0, 0.0], [0.0; 3], 0.0, 0.0)
             }
+            CaseId::HingeChain => {
+                // Link i spans x in [i L, (i+1) L]: a capsule along its
+                // body z, turned a quarter about y onto x, hinged about y
+                // at its inner end to link i-1 (the first to the world).
+                // Its joint's two bodies overlap at the hinge and do not
+                // touch (MuJoCo's default between parent and child).
+                let mut s = sim + "sphere_contacts = false\n";
+                let onto_x = [FRAC_PI_4.cos(), 0.0, FRAC_PI_4.sin(), 0.0];
+                for i in 0..S7_LINKS {
+                    let x = S7_LINK * (i as f64 + 0.5);
+                    s += &capsule(
+                        &format!("l{i}"),
+                        S7_R,
+                        0.5 * S7_LINK - S7_R,
+                        1.0,
+                        [x, 0.0, 0.0],
+                        onto_x,
+                        [0.0; 3],
+                        [0.0; 3],
+                        0.0,
+                    );
+                }
+                for i in 0..S7_LINKS {
+                    let a = chain_parent("l", i);
+                    s += &hinge(
+                        &format!("j{i}"),
+                        &a,
+                        &format!("l{i}"),
+                        [S7_LINK * i as f64, 0.0, 0.0],
+                        [0.0, 1.0, 0.0],
+                    );
+                }
+                s
+            }
+            CaseId::BoxIncline => {
+                // The box lies on its largest face, turned with the slope
+                // (about y), sent straight down it.
+                let (n, down) = incline_frame();
+                let half_angle = 0.5 * S8_INCLINE;
+                sim + &cuboid(
+                    "box",
+                    S8_HALF,
+                    1.0,
+                    (n * S8_HALF[2]).into(),
+                    [half_angle.cos(), 0.0, half_angle.sin(), 0.0],
+                    (down * S8_V0).into(),
+                    [0.0; 3],
+                    S8_MU,
+                ) + &plane("incline", n.into(), [0.0; 3], S8_MU, 0.0)
+            }
             CaseId::Reference => unreachable!("the reference scene is built in"),
         }
+    }
+}
+
+/// The body link `i` of a chain hangs from: the world, or link i-1.
+fn chain_parent(prefix: &str, i: usize) -> String {
+    match i {
+        0 => "world".to_string(),
+        _ => format!("{prefix}{}", i - 1),
     }
 }
 
@@ -258,7 +363,7 @@ fn rot(q: [f64; 4]) -> UnitQuaternion<f64> {
 }
 
 /// A joint as the scorer sees it: body A (`None`: the world) and its local
-/// anchor, body B and its local anchor.
+/// anchor, body B and its local anchor. The same for a hinge's axis.
 type JointAnchors = (Option<usize>, Vector3<f64>, usize, Vector3<f64>);
 
 /// Streams a trajectory into a [`Score`].
@@ -282,6 +387,14 @@ pub struct Scorer {
     max_drift: f64,
     joint_error: f64,
     anchors: Vec<JointAnchors>,
+    axis_error: f64,
+    axes: Vec<JointAnchors>,
+    /// Body-frame inertia of each body, as our engine takes it from the
+    /// scene (the shape's, or the scene's own).
+    inertias: Vec<Matrix3<f64>>,
+    // S8
+    stop_time: Option<f64>,
+    pitch: f64,
     // S6
     force_error: f64,
     force_sum: Vec<f64>,
@@ -304,19 +417,28 @@ impl Scorer {
         reference: Option<Vec<(f64, Vec<[f64; 3]>)>>,
     ) -> Scorer {
         let mut anchors = Vec::new();
+        let mut axes = Vec::new();
         let find = |n: &str| scene.bodies.iter().position(|b| b.name == n);
         for j in &scene.joints {
             let anchor = v3(j.anchor);
-            let local = |i: usize| {
-                let b = &scene.bodies[i];
-                rot(b.orientation).inverse_transform_vector(&(anchor - v3(b.position)))
+            let local = |i: usize, w: Vector3<f64>| {
+                rot(scene.bodies[i].orientation).inverse_transform_vector(&w)
             };
             let a = find(&j.body_a);
-            let la = a.map_or(anchor, local);
-            if let Some(b) = find(&j.body_b) {
-                anchors.push((a, la, b, local(b)));
+            let Some(b) = find(&j.body_b) else { continue };
+            let at = |i: usize| local(i, anchor - v3(scene.bodies[i].position));
+            anchors.push((a, a.map_or(anchor, at), b, at(b)));
+            if let (JointKind::Revolute, Some(axis)) = (j.kind, j.axis) {
+                let axis = v3(axis).normalize();
+                let along = |i: usize| local(i, axis);
+                axes.push((a, a.map_or(axis, along), b, along(b)));
             }
         }
+        let inertias = Model::from_scene(scene)
+            .bodies
+            .iter()
+            .map(|b| b.inertia)
+            .collect();
         Scorer {
             case,
             scene: scene.clone(),
@@ -334,6 +456,11 @@ impl Scorer {
             max_drift: 0.0,
             joint_error: 0.0,
             anchors,
+            axis_error: 0.0,
+            axes,
+            inertias,
+            stop_time: None,
+            pitch: 0.0,
             force_error: 0.0,
             force_sum: vec![0.0; corner_forces().len()],
             force_sq: vec![0.0; corner_forces().len()],
@@ -345,20 +472,35 @@ impl Scorer {
         }
     }
 
-    /// Total energy: kinetic (solid spheres) plus gravity's potential.
+    /// Total energy: kinetic (translation and rotation, `w . R J R^T w`
+    /// with the body-frame inertia J) plus gravity's potential.
     fn energy(&self, bodies: &[Pose]) -> f64 {
         let g = v3(self.scene.sim.gravity);
         self.scene
             .bodies
             .iter()
+            .zip(&self.inertias)
             .zip(bodies)
-            .map(|(b, p)| {
-                let r = sphere_radius(b);
-                let j = 0.4 * b.mass * r * r;
-                0.5 * b.mass * v3(p.v).norm_squared() + 0.5 * j * v3(p.w).norm_squared()
+            .map(|((b, j), p)| {
+                let w = rot(p.q).inverse_transform_vector(&v3(p.w));
+                0.5 * b.mass * v3(p.v).norm_squared() + 0.5 * w.dot(&(j * w))
                     - b.mass * g.dot(&v3(p.x))
             })
             .sum()
+    }
+
+    /// How far the box's lowest vertex is below the first plane (m).
+    fn box_sink(&self, p: &Pose) -> f64 {
+        let plane = &self.scene.planes[0];
+        let n = v3(plane.normal).normalize();
+        let ShapeDesc::Box { half_extents: e } = self.scene.bodies[0].shape() else {
+            return 0.0;
+        };
+        let q = rot(p.q);
+        // The lowest vertex puts each half extent against the normal.
+        let local = q.inverse_transform_vector(&n);
+        let reach: f64 = (0..3).map(|k| e[k] * local[k].abs()).sum();
+        reach - n.dot(&(v3(p.x) - v3(plane.point)))
     }
 
     /// The contact point's slip speed of body 0 on the first plane.
@@ -403,7 +545,17 @@ impl Scorer {
                     }
                 }
             }
-            CaseId::Chain => {
+            CaseId::BoxIncline => {
+                let p = &s.bodies[0];
+                let q0 = rot(self.scene.bodies[0].orientation);
+                self.pitch = self.pitch.max(q0.angle_to(&rot(p.q)));
+                self.sink = self.sink.max(self.box_sink(p));
+                // At rest once below 1 mm/s (soft contacts creep).
+                if self.stop_time.is_none() && v3(p.v).norm() < 1e-3 {
+                    self.stop_time = Some(s.t);
+                }
+            }
+            CaseId::Chain | CaseId::HingeChain => {
                 let e = self.energy(&s.bodies);
                 let e0 = *self.e0.get_or_insert(e);
                 self.max_drift = self.max_drift.max((e - e0).abs());
@@ -414,6 +566,14 @@ impl Scorer {
                     };
                     let pb = v3(s.bodies[*b].x) + rot(s.bodies[*b].q) * lb;
                     self.joint_error = self.joint_error.max((pa - pb).norm());
+                }
+                for (a, la, b, lb) in &self.axes {
+                    let ua = match a {
+                        Some(i) => rot(s.bodies[*i].q) * la,
+                        None => *la,
+                    };
+                    let ub = rot(s.bodies[*b].q) * lb;
+                    self.axis_error = self.axis_error.max(ua.cross(&ub).norm().min(1.0).asin());
                 }
             }
             CaseId::Corner => {
@@ -491,7 +651,28 @@ impl Scorer {
                     metrics: vec![("apex_m", apex), ("sink_m", self.sink)],
                 }
             }
-            CaseId::Chain => {
+            CaseId::BoxIncline => {
+                let (_, down) = incline_frame();
+                let start = v3(self.scene.bodies[0].position);
+                let d = last.first().map_or(0.0, |p| (v3(p.x) - start).dot(&down));
+                let creep = last.first().map_or(0.0, |p| v3(p.v).norm());
+                let stop = self.stop_time.unwrap_or(f64::INFINITY);
+                Score {
+                    error: (d - incline_stop_distance()).abs(),
+                    metrics: vec![
+                        ("distance_m", d),
+                        ("stop_time_s", stop),
+                        (
+                            "stop_time_error_s",
+                            (stop - S8_V0 / incline_deceleration()).abs(),
+                        ),
+                        ("end_speed_m_s", creep),
+                        ("pitch_rad", self.pitch),
+                        ("sink_m", self.sink),
+                    ],
+                }
+            }
+            CaseId::Chain | CaseId::HingeChain => {
                 let scale: f64 = self
                     .scene
                     .bodies
@@ -499,12 +680,16 @@ impl Scorer {
                     .map(|b| b.mass * G * v3(b.position).norm())
                     .sum();
                 let e_end = self.energy(last);
+                let mut metrics = vec![
+                    ("max_energy_drift", self.max_drift / scale),
+                    ("joint_error_m", self.joint_error),
+                ];
+                if self.case == CaseId::HingeChain {
+                    metrics.push(("axis_error_rad", self.axis_error));
+                }
                 Score {
                     error: (e_end - self.e0.unwrap_or(e_end)).abs() / scale,
-                    metrics: vec![
-                        ("max_energy_drift", self.max_drift / scale),
-                        ("joint_error_m", self.joint_error),
-                    ],
+                    metrics,
                 }
             }
             CaseId::Corner => {

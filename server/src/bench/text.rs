@@ -94,3 +94,11 @@ pub fn joint(name: &str, a: &str, b: &str, anchor: [f64; 3]) -> String {
         anchor[0], anchor[1], anchor[2]
     )
 }
+
+/// A revolute `[[joint]]` about `axis` (a world direction at t = 0).
+pub fn hinge(name: &str, a: &str, b: &str, anchor: [f64; 3], axis: [f64; 3]) -> String {
+    format!(
+        "[[joint]]\nname = \"{name}\"\ntype = \"revolute\"\nbody_a = \"{a}\"\nbody_b = \"{b}\"\nanchor = [{:e}, {:e}, {:e}]\naxis = [{:e}, {:e}, {:e}]\ncollide = false\n",
+        anchor[0], anchor[1], anchor[2], axis[0], axis[1], axis[2]
+    )
+}

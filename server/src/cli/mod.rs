@@ -203,7 +203,7 @@ pub struct AccuracyArgs {
     /// Two steps (1e-2, 1e-3) and two settings only.
     #[arg(long)]
     pub quick: bool,
-    /// Only these cases (S1, S2, S3, S4, S6, REF), comma-separated.
+    /// Only these cases (S1, S2, S3, S4, S6, S7, S8, REF), comma-separated.
     #[arg(long, value_delimiter = ',')]
     pub cases: Vec<String>,
 }
@@ -536,7 +536,7 @@ fn bench_accuracy(args: &AccuracyArgs) -> ExitCode {
                 Some(id) => cases.push(id),
                 None => {
                     eprintln!(
-                        "error: --cases: unknown case {c:?}, expected S1, S2, S3, S4, S6 or REF"
+                        "error: --cases: unknown case {c:?}, expected S1, S2, S3, S4, S6, S7, S8 or REF"
                     );
                     return ExitCode::from(EXIT_BAD_INPUT);
                 }
