@@ -540,17 +540,21 @@ impl Engine {
                 ws.contact_set(&self.model, &self.state);
             }
         }
-        self.projected = match project::deep_penetration(
-            &ws.contacts,
-            &ws.minv,
-            &self.model.jointed,
-            &self.model.params,
-            &mut self.state,
-            &mut self.lemke,
-            &mut ws.projection,
-        ) {
-            Ok(n) => n,
-            Err(e) => {
+        let depth = project::Depth::of(&self.model.params, &self.pgs_params);
+        self.projected = match depth.map(|depth| {
+            project::deep_penetration(
+                &ws.contacts,
+                &ws.minv,
+                &self.model.jointed,
+                depth,
+                &mut self.state,
+                &mut self.lemke,
+                &mut ws.projection,
+            )
+        }) {
+            None => 0,
+            Some(Ok(n)) => n,
+            Some(Err(e)) => {
                 // The velocity stabilisation still acts on the contacts.
                 tracing::warn!("projection out of deep penetration failed: {e}");
                 0

@@ -154,7 +154,7 @@ pub struct StepReport {
     /// fallback the motors' work alone (`Mlcp::motor_work`);
     /// infinite with `Params::fallback` off (not checked).
     pub energy_allowance: f64,
-    /// Contacts that started the step deeper than `project::PENETRATION_SLOP`
+    /// Contacts that started the step deeper than `project::slop`
     /// and were projected out (positions moved, velocities kept).
     pub projected: usize,
     /// The first solve used the matrix part made by `Engine::prepare`

@@ -152,6 +152,9 @@ pub struct Outcome {
     pub state_bytes_per_body: f64,
     /// Bodies asleep at the end.
     pub asleep: usize,
+    /// Steps that projected contacts out of deep penetration
+    /// (`engine::project`): none in a pile that runs as it should.
+    pub projecting: u64,
 }
 
 /// Runs the pile of `n` spheres as `settings` say.
@@ -181,7 +184,7 @@ pub fn run(n: usize, settings: &Settings) -> Outcome {
         let r = e.step();
         if trace > 0 && (k % trace == 0 || r.error.is_some()) {
             eprintln!(
-                "pile {n} step {k}: {:.2} ms, {} {} work, residual {:.1e}, lcp {}, active {}, islands {} (lemke {}, pgs {}, largest {} bodies), pen {:.2e} m, ke {:.3e}, asleep {}, {} (ms: collision {:.2}, assemble {:.2}, solve {:.2}, integrate {:.2}, measure {:.2})",
+                "pile {n} step {k}: {:.2} ms, {} {} work, residual {:.1e}, lcp {}, active {}, islands {} (lemke {}, pgs {}, largest {} bodies), pen {:.2e} m, projected {}, ke {:.3e}, asleep {}, {} (ms: collision {:.2}, assemble {:.2}, solve {:.2}, integrate {:.2}, measure {:.2})",
                 r.timings.total * 1e3,
                 r.solver,
                 r.pivots,
@@ -193,6 +196,7 @@ pub fn run(n: usize, settings: &Settings) -> Outcome {
                 r.pgs_islands,
                 r.largest_island,
                 r.max_penetration,
+                r.projected,
                 r.energy.kinetic,
                 r.sleeping,
                 r.status(),
@@ -208,6 +212,7 @@ pub fn run(n: usize, settings: &Settings) -> Outcome {
             break;
         }
         out.capped += u64::from(r.not_converged);
+        out.projecting += u64::from(r.projected > 0);
         times.push(r.timings.total);
         work.push(r.pivots);
         out.worst_overlap = out.worst_overlap.max(r.max_penetration);
