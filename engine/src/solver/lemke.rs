@@ -184,6 +184,9 @@ pub struct Lemke {
     x: Vec<f64>,
     res: Vec<f64>,
     dx: Vec<f64>,
+    /// Scratch of [`Lemke::independent_support`]: which of the support's
+    /// indices repeat the ones before them.
+    dependent: Vec<bool>,
     /// The refined candidate.
     zr: Vec<f64>,
 }
@@ -308,6 +311,57 @@ impl Lemke {
         out
     }
 
+    /// Keeps in the support a maximal part of it, in its order, whose block
+    /// `M_SS` is nonsingular; true when it dropped an index. Elimination on
+    /// `M_SS` with the diagonal as pivots: index `k`'s pivot is then the
+    /// Schur complement of the kept ones before it, and `k` is dropped
+    /// (not used as a pivot) where that is below the LU's own singularity
+    /// bound, `PIVOT_TOLS[0]` of the block's largest entry.
+    ///
+    /// Why: a support carried from the last step can hold rows that repeat
+    /// others: a box's four vertices on a plane (three normal rows span its
+    /// support), a capsule's two ends held along its axis (the same
+    /// friction row twice). LU refuses that block as singular, and the
+    /// guess failed on most steps of boxes and capsules (172 of 3,000 held
+    /// on shapes.toml). The answer with the repeated indices at zero is
+    /// the vertex of the indeterminate support that the first indices
+    /// carry, the same one from step to step; it is verified like any.
+    fn independent_support(&mut self, lcp: &Lcp) -> bool {
+        let n = lcp.n;
+        let s = self.support.len();
+        self.lu.clear();
+        for &i in &self.support {
+            self.lu
+                .extend(self.support.iter().map(|&j| lcp.m[i * n + j]));
+        }
+        let scale = self.lu.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        self.dependent.clear();
+        self.dependent.resize(s, false);
+        let a = &mut self.lu;
+        for k in 0..s {
+            let d = a[k * s + k];
+            if d.is_nan() || d.abs() <= PIVOT_TOLS[0] * scale {
+                self.dependent[k] = true;
+                continue;
+            }
+            for r in k + 1..s {
+                let f = a[r * s + k] / d;
+                if f != 0.0 {
+                    for c in k + 1..s {
+                        a[r * s + c] -= f * a[k * s + c];
+                    }
+                }
+            }
+        }
+        let mut k = 0;
+        let dependent = &self.dependent;
+        self.support.retain(|_| {
+            k += 1;
+            !dependent[k - 1]
+        });
+        self.support.len() < s && !self.support.is_empty()
+    }
+
     /// `(M + shift I)_SS z_S = -q_S` for `S = self.support` into `z` (zero
     /// elsewhere): LU with partial pivoting, then one step of iterative
     /// refinement with the residual formed from the original data. False
@@ -387,7 +441,14 @@ impl Lemke {
         }
         self.support.clear();
         self.support.extend((0..n).filter(|&i| active[i]));
-        if self.support.is_empty() || !self.solve_support(lcp, 0.0, z) {
+        if self.support.is_empty() {
+            return None;
+        }
+        // A support whose block is singular still has an answer with the
+        // repeated indices at zero, where the LCP has one at all.
+        let solved = self.solve_support(lcp, 0.0, z)
+            || (self.independent_support(lcp) && self.solve_support(lcp, 0.0, z));
+        if !solved {
             return None;
         }
         // A sliding speed at the round-off of the data is a sticking
@@ -697,6 +758,31 @@ mod tests {
         assert!(lemke
             .solve_guess(&lcp, &[false, true], &[], &mut z)
             .is_none());
+    }
+
+    /// Two copies of one constraint (`z1 + z2 >= 1`, as a box's repeated
+    /// vertex rows): the guess of both is a singular block; its first index
+    /// alone carries the answer, `z = (1, 0)`, which verifies.
+    #[test]
+    fn a_guess_with_a_repeated_row_keeps_the_first_and_solves() {
+        let m = [1.0, 1.0, 1.0, 1.0];
+        let q = [-1.0, -1.0];
+        let lcp = Lcp { n: 2, m: &m, q: &q };
+        let mut z = [0.0; 2];
+        let info = Lemke::new()
+            .solve_guess(&lcp, &[true, true], &[], &mut z)
+            .expect("the first row carries it");
+        assert_eq!(info.rung, Rung::Guess);
+        assert_eq!(z, [1.0, 0.0]);
+        // Three copies, the last not in the guess: still the first.
+        let m = [2.0; 9];
+        let q = [-1.0; 3];
+        let lcp = Lcp { n: 3, m: &m, q: &q };
+        let mut z = [0.0; 3];
+        Lemke::new()
+            .solve_guess(&lcp, &[false, true, true], &[], &mut z)
+            .expect("the second row carries it");
+        assert_eq!(z, [0.0, 0.5, 0.0]);
     }
 
     #[test]
