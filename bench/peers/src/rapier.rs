@@ -14,6 +14,11 @@ fn vec3(a: [f64; 3]) -> Vector {
     Vector::new(a[0], a[1], a[2])
 }
 
+/// Our `[w, x, y, z]` orientation as Rapier's rotation.
+fn rotation(q: [f64; 4]) -> Rotation {
+    Rotation::from_xyzw(q[1], q[2], q[3], q[0])
+}
+
 pub(crate) struct World {
     pub(crate) world: PhysicsWorld,
     pub(crate) bodies: Vec<(RigidBodyHandle, ColliderHandle)>,
@@ -58,7 +63,7 @@ pub(crate) fn build(scene: &Scene, sleep: bool) -> World {
         let q = b.orientation;
         let rb = RigidBodyBuilder::dynamic()
             .translation(vec3(b.position))
-            .rotation(Rotation::from_xyzw(q[1], q[2], q[3], q[0]).to_scaled_axis())
+            .rotation(rotation(q).to_scaled_axis())
             .linvel(vec3(b.velocity))
             .angvel(vec3(b.angular_velocity))
             .can_sleep(sleep);
@@ -85,13 +90,14 @@ pub(crate) fn build(scene: &Scene, sleep: bool) -> World {
     let find = |n: &str| scene.bodies.iter().position(|b| b.name == n);
     for j in &scene.joints {
         let anchor = vec3(j.anchor);
-        let local = |i: Option<usize>| match i {
-            Some(i) => {
-                let b = &scene.bodies[i];
-                let q = b.orientation;
-                Rotation::from_xyzw(q[1], q[2], q[3], q[0]).inverse() * (anchor - vec3(b.position))
-            }
-            None => anchor,
+        // A world vector in body i's frame (the world's: itself).
+        let into = |i: Option<usize>, v: Vector| match i {
+            Some(i) => rotation(scene.bodies[i].orientation).inverse() * v,
+            None => v,
+        };
+        let local = |i: Option<usize>| {
+            let origin = i.map_or(Vector::ZERO, |i| vec3(scene.bodies[i].position));
+            into(i, anchor - origin)
         };
         let (a, b) = (find(&j.body_a), find(&j.body_b));
         let ha = a.map_or(ground, |i| bodies[i].0);
@@ -101,18 +107,11 @@ pub(crate) fn build(scene: &Scene, sleep: bool) -> World {
                 // A hinge: Rapier's revolute axes locked, its free
                 // rotation about each body's local x set to our axis.
                 let axis = vec3(axis).normalize();
-                let turn = |i: Option<usize>| match i {
-                    Some(i) => {
-                        let q = scene.bodies[i].orientation;
-                        Rotation::from_xyzw(q[1], q[2], q[3], q[0]).inverse() * axis
-                    }
-                    None => axis,
-                };
                 let joint = GenericJointBuilder::new(JointAxesMask::LOCKED_REVOLUTE_AXES)
                     .local_anchor1(local(a))
                     .local_anchor2(local(b))
-                    .local_axis1(turn(a))
-                    .local_axis2(turn(b))
+                    .local_axis1(into(a, axis))
+                    .local_axis2(into(b, axis))
                     .contacts_enabled(j.collide);
                 world.impulse_joints.insert(ha, hb, joint, true);
             }
