@@ -27,13 +27,16 @@
 //!    rigid answer that failed the energy check and is reported as not
 //!    converged.
 
+use super::contact::Contact;
 use super::fallback::{allowance, explained, Fallback, Step};
+use super::island::Groups;
 use super::mlcp::{Mlcp, Offsets};
 use super::solver::Lemke;
 use super::solver::{pgs, Lcp, Pgs, PgsInfo, PgsParams, PgsProblem};
 use super::split::{self, Split};
-use super::state::State;
+use super::state::{State, WarmContact};
 use cosim_shared::FrictionCone;
+use nalgebra::Vector3;
 
 /// The warm start, the offsets in use and the rigid answer, kept while a
 /// relaxed retry runs.
@@ -50,6 +53,13 @@ pub struct Scratch {
     /// What Lemke did on its islands over the step's runs (the islands of
     /// the last run).
     done: split::Exact,
+    /// The last solve's impulses by contact identity (ascending id) and
+    /// its joints' and motors' (as `State::warm_joint`): the warm start of
+    /// a re-solve within the step ([`Solvers::from_attempt`]).
+    attempt: Vec<WarmContact>,
+    attempt_joint: Vec<f64>,
+    /// Per island, whether it starts from the attempt (`Attempt::dirty`).
+    dirty: Vec<bool>,
 }
 
 impl Scratch {
@@ -63,6 +73,26 @@ impl Scratch {
     pub fn iterated(&self) -> usize {
         self.split.rest.len()
     }
+
+    /// Keeps the answer in `m` (its contacts indexing `contacts`) as the
+    /// warm start of a re-solve of the same step.
+    pub fn keep_attempt(&mut self, m: &Mlcp, contacts: &[Contact]) {
+        self.attempt_joint.clear();
+        self.attempt_joint.extend_from_slice(&m.p_b);
+        self.attempt_joint
+            .extend((0..m.nm).map(|k| m.motor_impulse(k)));
+        self.attempt.clear();
+        let mut friction = m.friction_of.iter().enumerate().peekable();
+        for (i, &ci) in m.lcp_contacts.iter().enumerate() {
+            let c = &contacts[ci];
+            let block = friction.next_if(|(_, &row)| row == i);
+            self.attempt.push(WarmContact {
+                id: c.id,
+                normal: m.z[i],
+                friction: block.map_or(Vector3::zeros(), |(f, _)| m.friction_impulse(f, c)),
+            });
+        }
+    }
 }
 
 /// The solvers of the stage: PGS with its parameters, and, with `exact`,
@@ -71,6 +101,11 @@ pub struct Solvers<'a> {
     pub pgs: &'a mut Pgs,
     pub params: &'a PgsParams,
     pub exact: Option<Exact<'a>>,
+    /// Warm start from the step's last solve ([`Scratch::keep_attempt`])
+    /// where it has the contact, else from the last step: a re-solve
+    /// after the pruning's check added contacts starts next to the answer
+    /// it extends instead of from as far as the first solve did.
+    pub from_attempt: bool,
 }
 
 /// Lemke for the small islands (`split.rs`): the solver and the last
@@ -109,7 +144,21 @@ pub fn solve(
     }
     scratch.done = split::Exact::default();
     let p = step.params;
-    warm_start(m, state, step);
+    if solvers.from_attempt {
+        Attempt::mark(
+            m,
+            step.contacts,
+            step.groups,
+            &scratch.attempt,
+            &mut scratch.dirty,
+        );
+    }
+    let attempt = solvers.from_attempt.then_some(Attempt {
+        joint: &scratch.attempt_joint,
+        contacts: &scratch.attempt,
+        dirty: &scratch.dirty,
+    });
+    warm_start(m, state, attempt, step);
     scratch.warm.clone_from(&m.lambda);
     scratch.full_offset.clear();
     scratch.full_offset.extend_from_slice(&m.offset);
@@ -200,6 +249,7 @@ pub fn solve(
             lemke: &mut *e.lemke,
             guess: e.guess,
         }),
+        from_attempt: false,
     };
     let cold = run(&mut plain, m, &scratch.offset, step, nu, islands);
     set_joint_impulses(m);
@@ -228,29 +278,86 @@ fn restore_rigid(m: &mut Mlcp, step: Step, nu: &mut Vec<f64>, scratch: &Scratch)
     set_joint_impulses(m);
 }
 
+/// This step's last solve as a warm start: its joints' and motors'
+/// impulses (as `State::warm_joint`), its contacts' (ascending id), and
+/// which of this solve's islands take them.
+#[derive(Clone, Copy)]
+struct Attempt<'a> {
+    joint: &'a [f64],
+    contacts: &'a [WarmContact],
+    /// Per island: it holds a contact the attempt did not (one the
+    /// pruning's check added). NOTE: only those islands start from the
+    /// attempt. Every other island is an island of the last solve, row
+    /// for row, and starts where that solve started, so it comes out to
+    /// the same bits: an island's motion does not depend on whether
+    /// another island's contacts were added (tests/tests/islands.rs).
+    dirty: &'a [bool],
+}
+
+impl<'a> Attempt<'a> {
+    fn contact(self, id: usize) -> Option<&'a WarmContact> {
+        let a = self.contacts;
+        a.binary_search_by_key(&id, |w| w.id).ok().map(|k| &a[k])
+    }
+
+    /// Marks in `dirty` the islands of `m` (grouped as `groups`) that
+    /// hold a contact `contacts` does not.
+    fn mark(
+        m: &Mlcp,
+        contacts: &[Contact],
+        groups: &Groups,
+        kept: &[WarmContact],
+        dirty: &mut Vec<bool>,
+    ) {
+        dirty.clear();
+        dirty.resize(groups.len(), false);
+        for (i, &ci) in m.lcp_contacts.iter().enumerate() {
+            let id = contacts[ci].id;
+            if kept.binary_search_by_key(&id, |w| w.id).is_err() {
+                dirty[groups.island_of_row(m.nb + i)] = true;
+            }
+        }
+    }
+}
+
 /// Joint impulses and normal impulses by contact identity from the last
-/// step; friction as the last step's world impulse on this step's tangent
+/// step, or from `attempt` in the islands it marks dirty (where it has
+/// the contact); friction as the world impulse on this step's tangent
 /// plane, inside this step's cone.
-fn warm_start(m: &mut Mlcp, state: &State, step: Step) {
+fn warm_start(m: &mut Mlcp, state: &State, attempt: Option<Attempt>, step: Step) {
     let p = step.params;
     m.lambda.clear();
     m.lambda.resize(m.rows.len(), 0.0);
     if !p.skips.warm_start {
         return;
     }
-    m.lambda[..m.nb].copy_from_slice(&state.warm_joint[..m.nb]);
+    let groups = step.groups;
+    // The attempt where row `k`'s island takes it.
+    let from = |k: usize| attempt.filter(|a| a.dirty[groups.island_of_row(k)]);
+    let warm = |k: usize, id: usize| {
+        from(k)
+            .and_then(|a| a.contact(id))
+            .or_else(|| state.warm(id))
+    };
+    for k in 0..m.nb {
+        m.lambda[k] = from(k).map_or(state.warm_joint[k], |a| a.joint[k]);
+    }
     // The motors' impulses follow the joints' in the state, and their
     // rows the friction rows here.
     let motors = m.motor_rows();
-    m.lambda[motors..motors + m.nm].copy_from_slice(&state.warm_joint[m.nb..]);
+    for (k, &row) in m.motor_row.iter().enumerate() {
+        let at = m.nb + k;
+        m.lambda[motors + k] = from(row).map_or(state.warm_joint[at], |a| a.joint[at]);
+    }
     for (i, &ci) in m.lcp_contacts.iter().enumerate() {
         if m.held.get(i) != Some(&true) {
-            m.lambda[m.nb + i] = state.warm(step.contacts[ci].id).map_or(0.0, |w| w.normal);
+            let id = step.contacts[ci].id;
+            m.lambda[m.nb + i] = warm(m.nb + i, id).map_or(0.0, |w| w.normal);
         }
     }
     for (f, &i) in m.friction_of.iter().enumerate() {
         let c = &step.contacts[m.lcp_contacts[i]];
-        let Some(w) = state.warm(c.id).map(|w| w.friction) else {
+        let Some(w) = warm(m.nb + i, c.id).map(|w| w.friction) else {
             continue;
         };
         let base = m.nb + m.nc + f * m.nd;

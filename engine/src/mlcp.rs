@@ -645,6 +645,18 @@ impl Mlcp {
         self.dirs[j]
     }
 
+    /// Friction block `f`'s impulse in the answer `z` as a world vector on
+    /// contact `c`'s tangent plane (`c` the block's contact).
+    pub fn friction_impulse(&self, f: usize, c: &Contact) -> Vector3<f64> {
+        let base = self.nc + f * self.nd;
+        (0..self.nd)
+            .map(|j| {
+                let (cs, sn) = self.dirs[j];
+                (c.t1 * cs + c.t2 * sn) * self.z[base + j]
+            })
+            .sum()
+    }
+
     /// Factors `A_bb` and forms `Y = L^-1 A_bc`.
     fn reduce_joints(&mut self) -> Result<(), MlcpError> {
         let (nb, r) = (self.nb, self.basis.len());

@@ -127,6 +127,11 @@ pub struct StepReport {
     pub sleeping: usize,
     /// Left-out contacts that the velocity check added back (re-solves).
     pub resolves: usize,
+    /// Contacts the answer would close that its LCP did not hold: found
+    /// by the velocity check after the step's PGS sweeps ran out (the
+    /// cap bounds a step's sweeps over its re-solves), so not solved
+    /// again. They enter the next step's LCP, penetrating if they closed.
+    pub left_out: usize,
     /// The iterative solver stopped on its iteration cap, not its tolerance:
     /// the step went on with the answer it had (residual reported).
     pub not_converged: bool,

@@ -20,7 +20,7 @@ pub fn num(x: f64) -> String {
 }
 
 pub use cosim_shared::{IMPULSES_HEADER, JOINTS_HEADER, STATES_HEADER};
-pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw,projected,rung,refined,fallback,compliance,energy_refused,islands,largest_island,sleeping,lemke_islands,pgs_islands,max_joint_angle_error";
+pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw,projected,rung,refined,fallback,compliance,energy_refused,islands,largest_island,sleeping,lemke_islands,pgs_islands,max_joint_angle_error,left_out";
 
 /// The CSV files of a run.
 pub struct Writers {
@@ -191,6 +191,7 @@ impl Writers {
             r.lemke_islands.to_string(),
             r.pgs_islands.to_string(),
             num(r.max_joint_angle_error),
+            r.left_out.to_string(),
         ];
         writeln!(self.steps, "{}", fields.join(","))
     }

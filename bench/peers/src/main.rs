@@ -45,6 +45,12 @@ struct Args {
     /// work-precision figure.
     #[arg(long, value_delimiter = ',', default_value = "1e-2,3e-2,3e-3")]
     ours_tolerances: Vec<f64>,
+    /// Our first tolerance without its run with sleeping on.
+    #[arg(long)]
+    no_ours_sleep: bool,
+    /// Rapier's iteration counts (each with sleeping off and on).
+    #[arg(long, value_delimiter = ',', default_value = "1,4,8,16")]
+    rapier_iterations: Vec<usize>,
     /// Also write the pile table to this file.
     #[arg(long)]
     pile_out: Option<PathBuf>,
@@ -71,7 +77,11 @@ fn piles(args: &Args) -> ExitCode {
     for &n in &args.pile {
         if n <= args.ours_up_to {
             for (k, &tolerance) in args.ours_tolerances.iter().enumerate() {
-                let sleeps: &[bool] = if k == 0 { &[false, true] } else { &[false] };
+                let sleeps: &[bool] = if k == 0 && !args.no_ours_sleep {
+                    &[false, true]
+                } else {
+                    &[false]
+                };
                 for &sleep in sleeps {
                     let r = pile::ours(
                         n,
@@ -87,7 +97,7 @@ fn piles(args: &Args) -> ExitCode {
             }
         }
         for sleep in [false, true] {
-            for iterations in [1, 4, 8, 16] {
+            for &iterations in &args.rapier_iterations {
                 let r = pile::rapier(n, &settings, iterations, sleep);
                 eprintln!("{r:?}");
                 rows.push(r);

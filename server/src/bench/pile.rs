@@ -184,7 +184,7 @@ pub fn run(n: usize, settings: &Settings) -> Outcome {
         let r = e.step();
         if trace > 0 && (k % trace == 0 || r.error.is_some()) {
             eprintln!(
-                "pile {n} step {k}: {:.2} ms, {} {} work, residual {:.1e}, lcp {}, active {}, islands {} (lemke {}, pgs {}, largest {} bodies), pen {:.2e} m, projected {}, resolves {}, fallback {:?}, refused {}, ke {:.3e}, asleep {}, {} (ms: collision {:.2}, assemble {:.2}, solve {:.2}, integrate {:.2}, measure {:.2})",
+                "pile {n} step {k}: {:.2} ms, {} {} work, residual {:.1e}, lcp {}, active {}, islands {} (lemke {}, pgs {}, largest {} bodies), pen {:.2e} m, projected {}, resolves {}, left out {}, fallback {:?}, refused {}, ke {:.3e}, asleep {}, {} (ms: collision {:.2}, assemble {:.2}, solve {:.2}, integrate {:.2}, measure {:.2})",
                 r.timings.total * 1e3,
                 r.solver,
                 r.pivots,
@@ -198,6 +198,7 @@ pub fn run(n: usize, settings: &Settings) -> Outcome {
                 r.max_penetration,
                 r.projected,
                 r.resolves,
+                r.left_out,
                 r.fallback,
                 r.energy_refused,
                 r.energy.kinetic,
