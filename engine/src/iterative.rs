@@ -36,7 +36,6 @@ use super::solver::{pgs, Lcp, Pgs, PgsInfo, PgsParams, PgsProblem};
 use super::split::{self, Split};
 use super::state::{State, WarmContact};
 use cosim_shared::FrictionCone;
-use nalgebra::Vector3;
 
 /// The warm start, the offsets in use and the rigid answer, kept while a
 /// relaxed retry runs.
@@ -82,16 +81,8 @@ impl Scratch {
         self.attempt_joint
             .extend((0..m.nm).map(|k| m.motor_impulse(k)));
         self.attempt.clear();
-        let mut friction = m.friction_of.iter().enumerate().peekable();
-        for (i, &ci) in m.lcp_contacts.iter().enumerate() {
-            let c = &contacts[ci];
-            let block = friction.next_if(|(_, &row)| row == i);
-            self.attempt.push(WarmContact {
-                id: c.id,
-                normal: m.z[i],
-                friction: block.map_or(Vector3::zeros(), |(f, _)| m.friction_impulse(f, c)),
-            });
-        }
+        self.attempt
+            .extend(m.contact_impulses(contacts).map(|(_, w, _)| w));
     }
 }
 
@@ -296,8 +287,7 @@ struct Attempt<'a> {
 
 impl<'a> Attempt<'a> {
     fn contact(self, id: usize) -> Option<&'a WarmContact> {
-        let a = self.contacts;
-        a.binary_search_by_key(&id, |w| w.id).ok().map(|k| &a[k])
+        WarmContact::find(self.contacts, id)
     }
 
     /// Marks in `dirty` the islands of `m` (grouped as `groups`) that
@@ -313,7 +303,7 @@ impl<'a> Attempt<'a> {
         dirty.resize(groups.len(), false);
         for (i, &ci) in m.lcp_contacts.iter().enumerate() {
             let id = contacts[ci].id;
-            if kept.binary_search_by_key(&id, |w| w.id).is_err() {
+            if WarmContact::find(kept, id).is_none() {
                 dirty[groups.island_of_row(m.nb + i)] = true;
             }
         }

@@ -1008,9 +1008,8 @@ impl Engine {
                 ws.impulses.push(record(ImpulseKind::JointTorque, tau));
             }
         }
-        let mut friction = m.friction_of.iter().enumerate().peekable();
-        for (i, &ci) in m.lcp_contacts.iter().enumerate() {
-            let c = &ws.contacts[ci];
+        for (i, warm, block) in m.contact_impulses(&ws.contacts) {
+            let c = &ws.contacts[m.lcp_contacts[i]];
             let b = match c.geom.b {
                 Counterpart::Plane(p) => Party::Plane(p),
                 Counterpart::Body(j) => Party::Body(j),
@@ -1046,20 +1045,12 @@ impl Engine {
                 ws.impulses
                     .push(record(ImpulseKind::Normal, c.geom.normal * m.z[i]));
             }
-            let block = friction.next_if(|(_, &row)| row == i);
-            self.state.warm_lcp.push((c.id, block.is_some()));
-            let mut p = Vector3::zeros();
-            if let Some((f, _)) = block {
-                p = m.friction_impulse(f, c);
-                if p != Vector3::zeros() {
-                    ws.impulses.push(record(ImpulseKind::Friction, p));
-                }
+            self.state.warm_lcp.push((c.id, block));
+            if warm.friction != Vector3::zeros() {
+                ws.impulses
+                    .push(record(ImpulseKind::Friction, warm.friction));
             }
-            self.state.warm_contacts.push(WarmContact {
-                id: c.id,
-                normal: m.z[i],
-                friction: p,
-            });
+            self.state.warm_contacts.push(warm);
         }
         if !ws.sleeping_warm.is_empty() {
             let warm = &mut self.state.warm_contacts;

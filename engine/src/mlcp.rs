@@ -51,7 +51,7 @@ use super::applied::InvMass;
 use super::contact::Contact;
 use super::model::{Attachment, Model, Params};
 use super::rows::Row;
-use super::state::State;
+use super::state::{State, WarmContact};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{
     cholesky_in_place, cholesky_in_place_scratch, LltRegularization,
@@ -645,9 +645,30 @@ impl Mlcp {
         self.dirs[j]
     }
 
+    /// Each LCP contact's impulses in the answer `z` as a warm start keeps
+    /// them (`contacts` indexed by `lcp_contacts`), in the LCP's order,
+    /// which ascends by id: its normal row `i`, the impulses, and whether
+    /// it has a friction block (else its friction is zero).
+    pub fn contact_impulses<'a>(
+        &'a self,
+        contacts: &'a [Contact],
+    ) -> impl Iterator<Item = (usize, WarmContact, bool)> + 'a {
+        let mut friction = self.friction_of.iter().enumerate().peekable();
+        self.lcp_contacts.iter().enumerate().map(move |(i, &ci)| {
+            let c = &contacts[ci];
+            let block = friction.next_if(|(_, &row)| row == i).map(|(f, _)| f);
+            let warm = WarmContact {
+                id: c.id,
+                normal: self.z[i],
+                friction: block.map_or(Vector3::zeros(), |f| self.friction_impulse(f, c)),
+            };
+            (i, warm, block.is_some())
+        })
+    }
+
     /// Friction block `f`'s impulse in the answer `z` as a world vector on
     /// contact `c`'s tangent plane (`c` the block's contact).
-    pub fn friction_impulse(&self, f: usize, c: &Contact) -> Vector3<f64> {
+    fn friction_impulse(&self, f: usize, c: &Contact) -> Vector3<f64> {
         let base = self.nc + f * self.nd;
         (0..self.nd)
             .map(|j| {

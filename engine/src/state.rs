@@ -53,6 +53,15 @@ pub struct WarmContact {
     pub friction: Vector3<f64>,
 }
 
+impl WarmContact {
+    /// Contact `id`'s entry in `list` (ascending id).
+    pub fn find(list: &[WarmContact], id: usize) -> Option<&WarmContact> {
+        list.binary_search_by_key(&id, |w| w.id)
+            .ok()
+            .map(|k| &list[k])
+    }
+}
+
 impl State {
     /// Bytes the state holds on the heap: what a snapshot or a restore
     /// copies. O(bodies + joints + contacts in the last LCP).
@@ -68,10 +77,7 @@ impl State {
 
     /// The last step's impulses of contact `id`, if it was in the LCP.
     pub fn warm(&self, id: usize) -> Option<&WarmContact> {
-        self.warm_contacts
-            .binary_search_by_key(&id, |w| w.id)
-            .ok()
-            .map(|k| &self.warm_contacts[k])
+        WarmContact::find(&self.warm_contacts, id)
     }
 
     pub fn initial(model: &Model) -> State {
