@@ -658,6 +658,7 @@ impl Engine {
             sleep::update(
                 &self.model,
                 &params,
+                &self.pgs_params,
                 &mut self.state,
                 &self.ws.contacts,
                 &mut self.ws.islands,

@@ -61,10 +61,18 @@ pub const PENETRATION_SLOP: f64 = 1e-4;
 /// `pgs` is the engine's iterative solver's parameters (the scene's, or
 /// what `Engine::set_pgs_params` set).
 pub fn slop(p: &Params, pgs: &PgsParams) -> f64 {
+    PENETRATION_SLOP.max(2.0 * p.h * resolution(p, pgs))
+}
+
+/// The constraint velocity (m/s) that a step's answer may leave: PGS's
+/// tolerance where its residual rule can solve a step (`auto` or `pgs`),
+/// else none (Lemke's answers and the distance rule's are exact to far
+/// below what a contact's depth or a body's rest would notice).
+pub fn resolution(p: &Params, pgs: &PgsParams) -> f64 {
     let iterative = p.solver != SolverChoice::Lemke && pgs.stop == Stop::Residual;
     match iterative {
-        true => PENETRATION_SLOP.max(2.0 * p.h * pgs.velocity_tolerance),
-        false => PENETRATION_SLOP,
+        true => pgs.velocity_tolerance,
+        false => 0.0,
     }
 }
 

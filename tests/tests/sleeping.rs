@@ -207,3 +207,34 @@ fn a_sleeping_island_keeps_its_warm_start() {
     assert!(r.ok() && r.sleeping == 1, "{r:?}");
     assert!(r.pivots < 50, "{} sweeps on waking", r.pivots);
 }
+
+/// Under PGS's residual rule (the pile's, 1 cm/s) a step's answer leaves
+/// constraint velocities of up to the tolerance, and bodies at rest keep
+/// moving at about that: the at-rest thresholds are raised to twice the
+/// tolerance (speed) and what moves a body's surface at that (spin), so
+/// that a settled pile sleeps at the scene's default thresholds (before:
+/// 0 of 100 asleep after 1,000 steps), and then stays to the bit.
+#[test]
+fn a_pile_under_the_residual_rule_falls_asleep() {
+    use cosim_server::bench::pile;
+    let text = pile::text_with(100, 0.01, 4, "auto", 1000, 1, true);
+    let scene = cosim_shared::Scene::parse(&text, "<pile>").unwrap();
+    let mut e = Engine::new(Model::from_scene(&scene));
+    // Measured: all 100 asleep at step 208 (2.08 s).
+    let slept = run_until_asleep(&mut e, 100);
+    assert!(slept < 1000, "slept at step {slept}");
+    let before: Vec<BodyState> = e.state().bodies.clone();
+    for _ in 0..50 {
+        let r = e.step();
+        assert!(r.ok() && r.sleeping == 100 && r.lcp_size == 0, "{r:?}");
+    }
+    assert_eq!(e.state().bodies, before);
+    // Asleep in the box, not in the air: every sphere at rest within a
+    // tenth of a millimetre of overlap.
+    let w = pile::half_width(100);
+    assert!(e
+        .state()
+        .bodies
+        .iter()
+        .all(|b| b.x.x.abs() < w && b.x.y.abs() < w && b.x.z > pile::RADIUS - 1e-4));
+}
