@@ -94,30 +94,25 @@ fn project_with(
     if cap <= 0.0 {
         return [0.0, 0.0];
     }
-    // The nearest point lies on an edge whose supporting line `x` crosses
-    // (`x - q` is in the normal cone at the nearest point `q`: along the
-    // edge's normal, or between two edges' normals at a vertex, where the
-    // larger part's edge is crossed since neighbouring normals are at
-    // most 120 degrees apart): only those are searched, and none is
-    // crossed inside. Why: the cone's projection was a sixth of a pile's
-    // sweep, most of it the search of every edge.
+    // Inside: within every edge's supporting line.
     let apothem = cap * cos_half;
-    let (c0, s0) = dir(0);
-    let (c1, s1) = dir(1);
-    // Every edge has the length of the first (a regular polygon).
-    let edge2 = cap * cap * ((c1 - c0).powi(2) + (s1 - s0).powi(2));
-    let mut best = x;
+    let inside = (0..nd).all(|j| {
+        let (c, s) = normal(j);
+        c * x[0] + s * x[1] <= apothem
+    });
+    if inside {
+        return x;
+    }
+    // Else the nearest point of the nearest edge.
+    let mut best = [0.0, 0.0];
     let mut best_d = f64::INFINITY;
     for j in 0..nd {
-        let (c, s) = normal(j);
-        if c * x[0] + s * x[1] <= apothem {
-            continue;
-        }
         let (c0, s0) = dir(j);
         let (c1, s1) = dir(j + 1);
         let (p0, p1) = ([cap * c0, cap * s0], [cap * c1, cap * s1]);
         let e = [p1[0] - p0[0], p1[1] - p0[1]];
-        let t = (((x[0] - p0[0]) * e[0] + (x[1] - p0[1]) * e[1]) / edge2).clamp(0.0, 1.0);
+        let t = (((x[0] - p0[0]) * e[0] + (x[1] - p0[1]) * e[1]) / (e[0] * e[0] + e[1] * e[1]))
+            .clamp(0.0, 1.0);
         let q = [p0[0] + t * e[0], p0[1] + t * e[1]];
         let d = (q[0] - x[0]).powi(2) + (q[1] - x[1]).powi(2);
         if d < best_d {
@@ -217,7 +212,11 @@ mod tests {
     #[test]
     fn the_projection_is_the_nearest_point_of_every_edge() {
         // Against a search of every edge, at points around each polygon
-        // (inside, beyond an edge, beyond a vertex).
+        // (inside, beyond an edge, beyond a vertex). NOTE: a search of the
+        // crossed edges only (where the nearest point lies) made a sweep
+        // faster, but its rounding sent the reference scene's PGS run
+        // (10,000 steps) from its near-singular step 5,031 into 1,000
+        // steps at the sweep cap and relaxed, 11 times the sweeps: kept out.
         for nd in [3, 4, 5, 8, 16] {
             for k in 0..400 {
                 let a = 0.173 * k as f64;
