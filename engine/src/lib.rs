@@ -536,7 +536,8 @@ impl Engine {
         // out, so the set is listed again (each round can reach another
         // sleeping island; at most one round per island).
         if self.model.params.sleep.is_some() {
-            while sleep::wake_touched(&mut self.state, &ws.contacts) {
+            let reach = sleep::Reach::of(&self.model, &self.pgs_params);
+            while sleep::wake_touched(&mut self.state, &ws.contacts, reach) {
                 ws.contact_set(&self.model, &self.state);
             }
         }

@@ -5,8 +5,8 @@
 //! angular speed stay below the scene's thresholds (raised to the
 //! solver's resolution where PGS's residual rule solves: see
 //! [`update`]); an island (the bodies
-//! the last step's contacts tie together, `island.rs`) whose bodies have
-//! all been at rest for `after` seconds falls asleep as one: its
+//! the last step's touching contacts tie together, `island.rs`, with
+//! touching as in [`Reach`]) whose bodies have all been at rest for `after` seconds falls asleep as one: its
 //! velocities are set to zero and its bodies keep one tag, the island's.
 //! While asleep its bodies are static for the step (no gravity, zero
 //! inverse mass, no position update), and the contacts among them and
@@ -15,13 +15,18 @@
 //!
 //! It wakes, as one island, in the step where
 //!
-//! - an awake body comes within a listed contact of one of its bodies (in
-//!   the contact set before the solve; the island's contacts are then
-//!   listed again in the same step, so an impact moves it at once),
+//! - an awake body's contact with one of its bodies comes within touching
+//!   reach by the end of the step (in the contact set before the solve;
+//!   the island's contacts are then listed again in the same step, so an
+//!   impact moves it at once),
 //! - an input (a body impulse) is applied to one of its bodies,
-//! - or, after the solve, a contact the broad phase listed late (a fast
-//!   body's widened reach) touches it: it was static for that step and is
-//!   awake in the next.
+//! - or, after the solve, a contact that the step closed (or that the
+//!   broad phase listed late, a fast body's widened reach) touches it: it
+//!   was static for that step and is awake in the next.
+//!
+//! A listed contact further away than touching reach neither wakes an
+//! island nor ties it to its neighbour: a body spinning or rolling slowly
+//! beside a sleeping stack leaves it asleep.
 //!
 //! Bodies on joints never sleep (the joint rows would need to leave the
 //! step with them; the robots of issue 17 will make joints islands of
@@ -29,10 +34,10 @@
 //! `sleep_tag`), so a snapshot, a restore and a replay repeat its bits.
 
 use super::collision::Counterpart;
-use super::contact::Contact;
+use super::contact::{relative_velocity, Contact};
 use super::island::Islands;
 use super::model::Model;
-use super::project::resolution;
+use super::project::{resolution, slop};
 use super::solver::pgs::PgsParams;
 use super::state::State;
 use nalgebra::Vector3;
@@ -96,20 +101,54 @@ pub fn wake_body(state: &mut State, i: usize) -> bool {
     }
 }
 
-/// Wakes the islands that a listed contact ties to an awake body; true
-/// when one woke (then the contact set must be listed again: the woken
-/// islands' own contacts were left out).
-pub fn wake_touched(state: &mut State, contacts: &[Contact]) -> bool {
+/// How close a contact's surfaces come by the end of a step at the
+/// bodies' present velocities: its gap, less what its approach closes in
+/// `h` (a separating contact keeps its gap).
+fn reach(state: &State, c: &Contact, h: f64) -> f64 {
+    let v_n = relative_velocity(state, &c.geom).dot(&c.geom.normal);
+    c.geom.gap + h * v_n.min(0.0)
+}
+
+/// The distances at which contacts tie bodies for sleeping: where PGS's
+/// residual rule solves, bodies at rest sit up to the projection's slop
+/// deep and drift by up to `h` times its tolerance a step, so a contact
+/// touches within that slop. Islands are tied by contacts within twice
+/// that and woken by contacts within it: a neighbour jittering at the
+/// solver's resolution between the two neither joins nor wakes an island.
+#[derive(Debug, Clone, Copy)]
+pub struct Reach {
+    pub h: f64,
+    pub touch: f64,
+}
+
+impl Reach {
+    pub fn of(model: &Model, pgs: &PgsParams) -> Reach {
+        Reach {
+            h: model.params.h,
+            touch: slop(&model.params, pgs),
+        }
+    }
+}
+
+/// Wakes the islands that a contact within touching reach ties to an
+/// awake body; true when one woke (then the contact set must be listed
+/// again: the woken islands' own contacts were left out). A contact
+/// further away leaves the sleeping body static for the step: an awake
+/// body that closes it meets a still body, and wakes it after the step.
+pub fn wake_touched(state: &mut State, contacts: &[Contact], at: Reach) -> bool {
     let mut woke = false;
     for c in contacts {
         let Counterpart::Body(j) = c.geom.b else {
             continue;
         };
         let a = c.geom.a;
-        match (asleep(state, a), asleep(state, j)) {
-            (true, false) => woke |= wake_body(state, a),
-            (false, true) => woke |= wake_body(state, j),
-            _ => {}
+        let sleeper = match (asleep(state, a), asleep(state, j)) {
+            (true, false) => a,
+            (false, true) => j,
+            _ => continue,
+        };
+        if reach(state, c, at.h) <= at.touch {
+            woke |= wake_body(state, sleeper);
         }
     }
     woke
@@ -135,8 +174,10 @@ pub fn update(
 ) {
     let n = state.bodies.len();
     let h = model.params.h;
-    // Late contacts (listed after the solve began) wake the next step.
-    wake_touched(state, contacts);
+    // Contacts the step closed (late ones too, listed after the solve
+    // began) wake the next step.
+    let at = Reach::of(model, pgs);
+    wake_touched(state, contacts, at);
     // At rest to the solver's resolution: where a step's answer may leave
     // constraint velocities of up to a tolerance (PGS's residual rule),
     // bodies at rest move at up to about that, step after step, and a
@@ -176,14 +217,25 @@ pub fn update(
     }
     // Steps at rest an island needs: `after` seconds, at least one step.
     let need = ((params.after / h).ceil() as u32).max(1);
-    // NOTE: the islands of every listed contact, not the step's (which
-    // ties bodies by the contacts in its final LCP, the active ones): a
-    // part of a pile whose contacts to the rest carry no force would sleep
-    // alone, and the listed contact to its awake neighbour wake it in the
-    // next step, again and again (measured: the 100 pile never slept).
-    // Closed under what wakes an island, an island cannot be woken by its
-    // own neighbours at rest.
-    islands.partition(n, contacts.iter().map(|c| (c.geom.a, c.geom.b)));
+    // NOTE: the islands of the contacts within twice the touching reach,
+    // not the step's (which ties bodies by the contacts in its final LCP,
+    // the active ones): a part of a pile whose contacts to the rest carry
+    // no force would sleep alone, and the touching contact to its awake
+    // neighbour wake it in the next step, again and again (measured: the
+    // 100 pile never slept). Nor every listed contact: measured on the
+    // 1,000 pile, a sphere rolling slowly on its neighbours (no rolling
+    // resistance stops it) was tied to the whole pile by listed contacts
+    // a few tenths of a millimetre apart, and nothing slept. Closed
+    // under what wakes an island (with a margin: see `Reach`), an island
+    // cannot be woken by its own neighbours at rest.
+    let state_ro: &State = state;
+    islands.partition(
+        n,
+        contacts
+            .iter()
+            .filter(|c| reach(state_ro, c, at.h) <= 2.0 * at.touch)
+            .map(|c| (c.geom.a, c.geom.b)),
+    );
     // The least rest of each island, kept at its root; then the verdict.
     islands.least_rest(&state.rest, &state.sleep_tag, AWAKE);
     for i in 0..n {
