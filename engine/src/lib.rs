@@ -176,6 +176,8 @@ struct Workspace {
     mlcp: Mlcp,
     impulses: Vec<ImpulseRecord>,
     measure: Vec<Geometry>,
+    /// The penetration of the sleeping bodies' contacts, kept while asleep.
+    asleep: measure::Asleep,
     projection: project::Projection,
     /// Bodies in an impact this step (the trapezoid update skips them).
     impulsive: Vec<bool>,
@@ -246,12 +248,18 @@ impl Workspace {
         } else {
             collision::Listing::All
         };
-        collision::detect(model, state, listing, &mut self.collision, &mut self.geoms);
+        // A contact with no awake body is not listed (`sleep::unlisted`).
+        let keep = collision::Keep::Awake;
+        collision::detect(
+            model,
+            state,
+            listing,
+            keep,
+            &mut self.collision,
+            &mut self.geoms,
+        );
         contact::build(model, state, &self.geoms, &mut self.contacts);
         limit::limits(model, state, &mut self.contacts);
-        if sleep::any_asleep(state) {
-            sleep::drop_sleeping(state, &mut self.contacts);
-        }
     }
 
     /// Grows the broad phase's reach where a body's speed bound `speed(i)`
@@ -1072,8 +1080,13 @@ impl Engine {
         let _span = tracing::trace_span!("measure").entered();
         report.energy = measure::energy(&self.model, &self.state);
         let ws = &mut self.ws;
-        report.max_penetration =
-            measure::max_penetration(&self.model, &self.state, &mut ws.collision, &mut ws.measure);
+        report.max_penetration = measure::max_penetration(
+            &self.model,
+            &self.state,
+            &mut ws.collision,
+            &mut ws.measure,
+            &mut ws.asleep,
+        );
         report.max_joint_error = measure::max_joint_error(&self.model, &self.state);
         report.max_joint_angle_error = measure::max_joint_angle_error(&self.model, &self.state);
         timings.measure = lap.lap();

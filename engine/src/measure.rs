@@ -1,8 +1,10 @@
 //! Measurements of a state: energy, penetration, joint error.
 
-use super::collision::{detect, Geometry, Listing, Scratch};
+use super::collision::{detect, Geometry, Keep, Listing, Scratch};
 use super::model::Model;
+use super::sleep;
 use super::state::State;
+use nalgebra::{UnitQuaternion, Vector3};
 
 /// Energy of a state (J).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -41,22 +43,73 @@ pub fn energy(model: &Model, state: &State) -> Energy {
     }
 }
 
+/// The deepest penetration among the contacts with no awake body, kept
+/// while the sleeping bodies and their poses stay what they were: a
+/// sleeping pile's overlaps do not change, and measuring them every step
+/// cost more than the rest of its step (1,000 spheres asleep: 0.8 ms of
+/// about 1 ms). Measured again when a body sleeps or wakes or a sleeping
+/// body's pose differs (a restored snapshot).
+#[derive(Debug, Clone, Default)]
+pub struct Asleep {
+    /// Every body's sleep tag and each sleeping body's pose, as measured.
+    tags: Vec<u32>,
+    poses: Vec<(Vector3<f64>, UnitQuaternion<f64>)>,
+    deepest: f64,
+}
+
+impl Asleep {
+    fn unchanged(&self, state: &State) -> bool {
+        let mut sleeping = state
+            .bodies
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| sleep::asleep(state, i));
+        self.tags == state.sleep_tag
+            && self
+                .poses
+                .iter()
+                .all(|p| sleeping.next().is_some_and(|(_, b)| *p == (b.x, b.q)))
+            && sleeping.next().is_none()
+    }
+}
+
 /// Deepest penetration over every potential contact (m, >= 0). Only
 /// overlapping contacts can have one: the broad phase lists just those
-/// (every contact without it, as the step does).
+/// (every contact without it, as the step does). Those with no awake body
+/// come from `asleep` while it holds.
 pub fn max_penetration(
     model: &Model,
     state: &State,
     collision: &mut Scratch,
     scratch: &mut Vec<Geometry>,
+    asleep: &mut Asleep,
 ) -> f64 {
-    let listing = if model.params.broad_phase() {
-        Listing::Overlapping
-    } else {
-        Listing::All
+    let listing = || {
+        if model.params.broad_phase() {
+            Listing::Overlapping
+        } else {
+            Listing::All
+        }
     };
-    detect(model, state, listing, collision, scratch);
-    scratch.iter().fold(0.0f64, |a, g| a.max(-g.gap))
+    let deepest = |g: &[Geometry]| g.iter().fold(0.0f64, |a, g| a.max(-g.gap));
+    if !sleep::any_asleep(state) {
+        // The key no state with a sleeping body matches.
+        asleep.tags.clear();
+        asleep.deepest = 0.0;
+    } else if !asleep.unchanged(state) {
+        detect(model, state, listing(), Keep::Asleep, collision, scratch);
+        asleep.deepest = deepest(scratch);
+        asleep.tags.clear();
+        asleep.tags.extend_from_slice(&state.sleep_tag);
+        asleep.poses.clear();
+        asleep.poses.extend(
+            (state.bodies.iter().enumerate())
+                .filter(|&(i, _)| sleep::asleep(state, i))
+                .map(|(_, b)| (b.x, b.q)),
+        );
+    }
+    detect(model, state, listing(), Keep::Awake, collision, scratch);
+    deepest(scratch).max(asleep.deepest)
 }
 
 /// Largest rotation error of the hinges, sliders and fixed joints (rad).

@@ -10,8 +10,11 @@
 //! velocities are set to zero and its bodies keep one tag, the island's.
 //! While asleep its bodies are static for the step (no gravity, zero
 //! inverse mass, no position update), and the contacts among them and
-//! with the planes are not listed: the island costs its share of the
-//! broad phase and nothing else, and its state does not change by a bit.
+//! with the planes are not listed (left out before their narrow phase,
+//! `collision::Keep`): the island costs its keys in the broad phase's
+//! sort, a comparison of its poses with those its penetration was
+//! measured at (`measure::Asleep`), and nothing else, and its state does
+//! not change by a bit.
 //!
 //! It wakes, as one island, in the step where
 //!
@@ -152,11 +155,6 @@ pub fn wake_touched(state: &mut State, contacts: &[Contact], at: Reach) -> bool 
         }
     }
     woke
-}
-
-/// Drops the contacts with no awake body ([`unlisted`]).
-pub fn drop_sleeping(state: &State, contacts: &mut Vec<Contact>) {
-    contacts.retain(|c| !unlisted(state, c.geom.a, c.geom.b));
 }
 
 /// After the step: counts each awake body's steps at rest and puts the

@@ -186,12 +186,13 @@ fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
             motors += usize::from(j.motor.is_some());
         }
         let engine = Engine::new(model.clone());
-        let (mut scratch, mut geoms) = Default::default();
+        let (mut scratch, mut geoms, mut asleep) = Default::default();
         let deep = cosim_server::engine::measure::max_penetration(
             &model,
             engine.state(),
             &mut scratch,
             &mut geoms,
+            &mut asleep,
         );
         overlapping += usize::from(deep > 1e-4);
     }

@@ -15,7 +15,7 @@ fn settings(tolerance: f64) -> Settings {
         pgs: pile::pgs(tolerance),
         seed: 1,
         trace: 0,
-        sleep: false,
+        sleep: None,
     }
 }
 
@@ -65,7 +65,7 @@ fn a_steps_sweeps_stay_within_the_cap_over_its_re_solves() {
     use cosim_server::engine::solver::PgsParams;
     use cosim_server::engine::{Engine, Model};
     let cap = 2;
-    let text = pile::text_with(1000, 0.01, 4, "pgs", 200, 1, false);
+    let text = pile::text_with(1000, 0.01, 4, "pgs", 200, 1, None);
     let scene = cosim_shared::Scene::parse(&text, "<pile>").expect("valid scene");
     let mut model = Model::from_scene(&scene);
     model.params.fallback = false;

@@ -217,7 +217,7 @@ fn a_sleeping_island_keeps_its_warm_start() {
 #[test]
 fn a_pile_under_the_residual_rule_falls_asleep() {
     use cosim_server::bench::pile;
-    let text = pile::text_with(100, 0.01, 4, "auto", 1000, 1, true);
+    let text = pile::text_with(100, 0.01, 4, "auto", 1000, 1, Some(Default::default()));
     let scene = cosim_shared::Scene::parse(&text, "<pile>").unwrap();
     let mut e = Engine::new(Model::from_scene(&scene));
     // Measured: all 100 asleep at step 478 (208 before the cone search of
@@ -282,4 +282,48 @@ fn a_spinning_neighbour_that_does_not_touch_leaves_a_stack_asleep() {
     let s = e.state().bodies[2];
     assert!((s.w.z - 5.0).abs() < 1e-9, "{s:?}");
     assert!((s.x.x - (2.0 * R + gap)).abs() < 1e-9, "{s:?}");
+}
+
+/// A sleeping island leaves the collision stage and its overlaps are
+/// measured once, while it sleeps (`measure::Asleep`): the step's
+/// reported penetration stays the one of every contact, counted afresh,
+/// while the pile sleeps beside an awake body and after it wakes.
+#[test]
+fn a_sleeping_pile_reports_the_penetration_of_every_contact() {
+    use cosim_server::bench::pile;
+    use cosim_server::engine::collision::{detect, Keep, Listing};
+    // The pile, and a sphere falling from 1 km above it: awake throughout
+    // (it lands after about 14 s; the test ends before 8 s).
+    let text = pile::text_with(100, 0.01, 4, "auto", 1000, 1, Some(Default::default()))
+        + &sphere("faller", 0.05, 1.0, [0.0, 0.0, 1000.0], [0.0; 3], 0.5, 0.0);
+    let model = Model::from_scene(&cosim_shared::Scene::parse(&text, "<pile>").unwrap());
+    let mut e = Engine::new(model.clone());
+    let (mut scratch, mut geoms) = Default::default();
+    let mut every = |e: &Engine| {
+        detect(
+            &model,
+            e.state(),
+            Listing::All,
+            Keep::Every,
+            &mut scratch,
+            &mut geoms,
+        );
+        geoms.iter().fold(0.0f64, |a, g| a.max(-g.gap))
+    };
+    run_until_asleep(&mut e, 100);
+    let mut asleep = 0;
+    for k in 0..300 {
+        // Wake the pile with a push on one sphere, twice.
+        if k == 50 || k == 200 {
+            e.add_body_impulse(0, Vector3::new(0.0, 0.0, 0.5), Vector3::zeros())
+                .unwrap();
+        }
+        let r = e.step();
+        assert!(r.ok(), "{r:?}");
+        assert!(r.max_penetration > 0.0, "{r:?}");
+        assert_eq!(r.max_penetration, every(&e), "step {}", r.step);
+        asleep += usize::from(r.sleeping == 100);
+    }
+    // Asleep, and awake again, for a part of those steps each.
+    assert!((50..300).contains(&asleep), "{asleep} steps asleep");
 }

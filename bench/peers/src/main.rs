@@ -71,7 +71,7 @@ fn piles(args: &Args) -> ExitCode {
         pgs: rule(args.ours_tolerances.first().copied().unwrap_or(1e-2)),
         seed: 1,
         trace: 0,
-        sleep: false,
+        sleep: None,
     };
     let mut rows = Vec::new();
     for &n in &args.pile {
@@ -82,7 +82,7 @@ fn piles(args: &Args) -> ExitCode {
                 } else {
                     &[false]
                 };
-                for &sleep in sleeps {
+                for sleep in sleeps.iter().map(|&s| s.then(Default::default)) {
                     let r = pile::ours(
                         n,
                         &Settings {

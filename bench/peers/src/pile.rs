@@ -40,7 +40,11 @@ pub fn ours(n: usize, settings: &Settings) -> Row {
             "{} {:e} m/s, {}",
             settings.solver,
             settings.pgs.velocity_tolerance,
-            if settings.sleep { "sleep" } else { "no sleep" }
+            if settings.sleep.is_some() {
+                "sleep"
+            } else {
+                "no sleep"
+            }
         ),
         n,
         steps: o.steps,
@@ -61,7 +65,7 @@ pub fn rapier(n: usize, settings: &Settings, iterations: usize, sleep: bool) -> 
     let mut w = rapier::build(&scene, sleep);
     w.world.integration_parameters.num_solver_iterations = iterations.max(1);
     let mut state = State::initial(&model);
-    let (mut scratch, mut geoms) = Default::default();
+    let (mut scratch, mut geoms, mut asleep) = Default::default();
     let mut times = Vec::with_capacity(settings.steps as usize);
     let mut worst = 0.0f64;
     for _ in 0..settings.steps {
@@ -74,6 +78,7 @@ pub fn rapier(n: usize, settings: &Settings, iterations: usize, sleep: bool) -> 
             &state,
             &mut scratch,
             &mut geoms,
+            &mut asleep,
         ));
     }
     let total: f64 = times.iter().sum();

@@ -19,6 +19,7 @@ mod sphere_plane;
 mod sphere_sphere;
 
 use super::model::{Model, Plane, Shape};
+use super::sleep;
 use super::state::State;
 use nalgebra::Vector3;
 
@@ -80,6 +81,19 @@ pub enum Listing<'a> {
     /// Those that overlap (`Within` with no reach and no margin): all that
     /// a penetration can be measured on.
     Overlapping,
+}
+
+/// Which contacts `detect` lists by their bodies' sleep (`sleep.rs`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Keep {
+    /// Every one.
+    Every,
+    /// Those with an awake body: the step's (a contact with no awake body
+    /// is not listed, `sleep::unlisted`); left out before their narrow
+    /// phase, so that a sleeping pile costs no pair tests.
+    Awake,
+    /// Those with no awake body: what the measurements keep while asleep.
+    Asleep,
 }
 
 impl Listing<'_> {
@@ -238,17 +252,31 @@ pub fn body_pair(
 }
 
 /// Fills `out` with the potential contacts of the scene that `listing`
-/// names, in canonical order: every body against every plane, then the
-/// body pairs. With `sphere_contacts = false` there are no pairs; they
-/// come last in the order, so the other contacts keep their identities.
+/// names and `keep` keeps, in canonical order: every body against every
+/// plane, then the body pairs. With `sphere_contacts = false` there are no
+/// pairs; they come last in the order, so the other contacts keep their
+/// identities.
 pub fn detect(
     model: &Model,
     state: &State,
     listing: Listing,
+    keep: Keep,
     scratch: &mut Scratch,
     out: &mut Vec<Geometry>,
 ) {
     out.clear();
+    // Without a sleeping body, `Awake` is `Every` and `Asleep` is none.
+    let keep = match (keep, sleep::any_asleep(state)) {
+        (Keep::Asleep, false) => return,
+        (Keep::Awake, false) => Keep::Every,
+        (k, _) => k,
+    };
+    let awake = |i: usize| !sleep::asleep(state, i);
+    let kept = |i: usize, j: Option<usize>| match keep {
+        Keep::Every => true,
+        Keep::Awake => awake(i) || j.is_some_and(awake),
+        Keep::Asleep => !awake(i) && !j.is_some_and(awake),
+    };
     let all = matches!(listing, Listing::All);
     // The gap up to which a contact is listed: none beyond for `All`.
     let within = |reach: f64| {
@@ -261,7 +289,7 @@ pub fn detect(
     let bound = |i: usize| model.bodies[i].shape.bounding_radius();
     for i in 0..model.bodies.len() {
         // A body welded to the world is the world's (`Model::weld`).
-        if model.weld[i] == crate::model::WELDED_TO_WORLD {
+        if model.weld[i] == crate::model::WELDED_TO_WORLD || !kept(i, None) {
             continue;
         }
         let x = state.bodies[i].x;
@@ -278,7 +306,7 @@ pub fn detect(
         return;
     }
     let n = model.bodies.len();
-    let apart = |&(i, j): &(usize, usize)| model.may_touch(i, j);
+    let apart = |&(i, j): &(usize, usize)| model.may_touch(i, j) && kept(i, Some(j));
     if all {
         for i in 0..n {
             for j in i + 1..n {
@@ -297,6 +325,8 @@ pub fn detect(
         bound,
         reach,
         listing.margin(),
+        // Only the awake bodies look for partners when those are kept.
+        |i| keep != Keep::Awake || awake(i),
         pairs,
     );
     for &(i, j) in pairs.iter().filter(|p| apart(p)) {

@@ -8,6 +8,7 @@
 use crate::bench::robust::Rng;
 use crate::bench::text::{plane, sphere};
 use crate::engine::solver::PgsParams;
+use cosim_shared::scene::SleepDesc;
 use cosim_shared::Scene;
 
 /// Sphere radius (m) of the pile.
@@ -54,10 +55,10 @@ pub fn pgs(tolerance: f64) -> PgsParams {
 /// The scene text of a pile of `n` spheres, with step `dt` and friction
 /// directions `nd`, solver `solver` (`"pgs"`, `"lemke"`, `"auto"`).
 pub fn text(n: usize, dt: f64, nd: usize, solver: &str, steps: u64, seed: u64) -> String {
-    text_with(n, dt, nd, solver, steps, seed, false)
+    text_with(n, dt, nd, solver, steps, seed, None)
 }
 
-/// [`text`], with sleeping at its default thresholds when `sleep`.
+/// [`text`], with sleeping at `sleep`'s thresholds when given.
 pub fn text_with(
     n: usize,
     dt: f64,
@@ -65,7 +66,7 @@ pub fn text_with(
     solver: &str,
     steps: u64,
     seed: u64,
-    sleep: bool,
+    sleep: Option<SleepDesc>,
 ) -> String {
     let (side, _) = grid(n);
     let w = half_width(n);
@@ -73,8 +74,11 @@ pub fn text_with(
     let mut t = format!(
         "[sim]\nname = \"pile-{n}\"\ndt = {dt:e}\nsteps = {steps}\nfriction_directions = {nd}\nsolver = \"{solver}\"\n\n"
     );
-    if sleep {
-        t += "[sim.sleep]\n\n";
+    if let Some(s) = sleep {
+        t += &format!(
+            "[sim.sleep]\nafter = {:e}\nlinear_speed = {:e}\nangular_speed = {:e}\n\n",
+            s.after, s.linear_speed, s.angular_speed
+        );
     }
     t += &format!("[sim.pgs]\nstop = \"residual\"\ntolerance = {TOLERANCE:e}\n\n");
     t += &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.5, 0.0);
@@ -120,8 +124,8 @@ pub struct Settings {
     pub seed: u64,
     /// Print every `trace`-th step's report (0: none).
     pub trace: u64,
-    /// Islands at rest sleep (`[sim.sleep]` at its defaults).
-    pub sleep: bool,
+    /// Islands at rest sleep at these thresholds (`[sim.sleep]`).
+    pub sleep: Option<SleepDesc>,
 }
 
 /// One pile run's figures (`bench pile`).
@@ -250,10 +254,12 @@ pub fn run(n: usize, settings: &Settings) -> Outcome {
 pub fn table(rows: &[Outcome], settings: &Settings) -> String {
     let (dt, solver) = (settings.dt, &settings.solver);
     let (stop, tol) = (settings.pgs.stop, settings.pgs.velocity_tolerance);
-    let sleep = if settings.sleep {
-        "sleeping on"
-    } else {
-        "sleeping off"
+    let sleep = match settings.sleep {
+        Some(s) => format!(
+            "sleeping on ({} m/s, {} rad/s, {} s)",
+            s.linear_speed, s.angular_speed, s.after
+        ),
+        None => "sleeping off".into(),
     };
     let mut t = format!(
         "Pile of spheres (r = {RADIUS} m, mu = 0.5), h = {dt}, n_d = 4, solver {solver} \

@@ -182,6 +182,12 @@ pub enum BenchWhat {
         /// Islands at rest sleep (the scene's `[sim.sleep]` at its defaults).
         #[arg(long)]
         sleep: bool,
+        /// Sleeping at these thresholds instead, `LINEAR,ANGULAR` (m/s,
+        /// rad/s; implies --sleep). Rapier's rule amounts to about
+        /// `0.1,2` for these spheres: a body sleeps when no point of it
+        /// moved faster than 0.1 m/s over a step.
+        #[arg(long, value_parser = speed_pair)]
+        sleep_speeds: Option<(f64, f64)>,
         /// Also write the table to this file.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -479,6 +485,7 @@ pub fn main() -> ExitCode {
                     no_momentum,
                     relaxation,
                     sleep,
+                    sleep_speeds,
                     out,
                 },
         } => {
@@ -497,7 +504,14 @@ pub fn main() -> ExitCode {
                 },
                 seed,
                 trace,
-                sleep,
+                sleep: match sleep_speeds {
+                    Some((linear_speed, angular_speed)) => Some(cosim_shared::scene::SleepDesc {
+                        linear_speed,
+                        angular_speed,
+                        ..Default::default()
+                    }),
+                    None => sleep.then(cosim_shared::scene::SleepDesc::default),
+                },
             };
             let rows: Vec<_> = n.iter().map(|&n| pile::run(n, &settings)).collect();
             let table = format!(
@@ -637,4 +651,16 @@ fn print_table(
         }
     }
     ExitCode::SUCCESS
+}
+
+/// `LINEAR,ANGULAR`: two positive speeds (`bench pile --sleep-speeds`).
+fn speed_pair(s: &str) -> Result<(f64, f64), String> {
+    let parse = |t: &str| match t.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("`{t}` is not a positive speed")),
+    };
+    match s.split(',').collect::<Vec<_>>()[..] {
+        [l, a] => Ok((parse(l)?, parse(a)?)),
+        _ => Err(format!("`{s}` is not LINEAR,ANGULAR")),
+    }
 }
