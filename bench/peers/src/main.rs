@@ -48,6 +48,11 @@ struct Args {
     /// Our first tolerance without its run with sleeping on.
     #[arg(long)]
     no_ours_sleep: bool,
+    /// Our first tolerance also with sleeping at these thresholds,
+    /// `LINEAR,ANGULAR` (m/s, rad/s): `0.1,2` is about Rapier's rule for
+    /// these spheres (no point faster than 0.1 m/s over a step).
+    #[arg(long, value_delimiter = ',')]
+    ours_sleep_speeds: Vec<f64>,
     /// Rapier's iteration counts (each with sleeping off and on).
     #[arg(long, value_delimiter = ',', default_value = "1,4,8,16")]
     rapier_iterations: Vec<usize>,
@@ -62,6 +67,11 @@ struct Args {
 
 fn piles(args: &Args) -> ExitCode {
     use cosim_server::bench::pile::Settings;
+    use cosim_shared::scene::SleepDesc;
+    if !matches!(args.ours_sleep_speeds.len(), 0 | 2) {
+        eprintln!("--ours-sleep-speeds: LINEAR,ANGULAR, two speeds");
+        return ExitCode::FAILURE;
+    }
     // The pile scene's own rule at each tolerance.
     let rule = cosim_server::bench::pile::pgs;
     let settings = Settings {
@@ -77,12 +87,18 @@ fn piles(args: &Args) -> ExitCode {
     for &n in &args.pile {
         if n <= args.ours_up_to {
             for (k, &tolerance) in args.ours_tolerances.iter().enumerate() {
-                let sleeps: &[bool] = if k == 0 && !args.no_ours_sleep {
-                    &[false, true]
-                } else {
-                    &[false]
-                };
-                for sleep in sleeps.iter().map(|&s| s.then(Default::default)) {
+                let mut sleeps = vec![None];
+                if k == 0 && !args.no_ours_sleep {
+                    sleeps.push(Some(SleepDesc::default()));
+                }
+                if let (0, &[linear_speed, angular_speed]) = (k, &args.ours_sleep_speeds[..]) {
+                    sleeps.push(Some(SleepDesc {
+                        linear_speed,
+                        angular_speed,
+                        ..Default::default()
+                    }));
+                }
+                for sleep in sleeps {
                     let r = pile::ours(
                         n,
                         &Settings {

@@ -11,6 +11,7 @@ use cosim_server::bench::accuracy::bounds;
 use cosim_server::bench::pile::{self, Settings};
 use cosim_server::engine::{measure, BodyState, Model, State};
 use cosim_server::plot::{color, ensure_font, log_log, LogLog, FONT};
+use cosim_shared::scene::SleepDesc;
 use cosim_shared::Scene;
 use plotters::prelude::*;
 use rapier3d_f64::prelude::*;
@@ -40,10 +41,10 @@ pub fn ours(n: usize, settings: &Settings) -> Row {
             "{} {:e} m/s, {}",
             settings.solver,
             settings.pgs.velocity_tolerance,
-            if settings.sleep.is_some() {
-                "sleep"
-            } else {
-                "no sleep"
+            match settings.sleep {
+                None => "no sleep".to_string(),
+                Some(s) if s == SleepDesc::default() => "sleep".to_string(),
+                Some(s) => format!("sleep at {} m/s, {} rad/s", s.linear_speed, s.angular_speed),
             }
         ),
         n,
