@@ -58,18 +58,15 @@ pub struct Asleep {
 }
 
 impl Asleep {
+    /// The sleeping bodies' poses, in body order.
+    fn poses(state: &State) -> impl Iterator<Item = (Vector3<f64>, UnitQuaternion<f64>)> + '_ {
+        (state.bodies.iter().enumerate())
+            .filter(|&(i, _)| sleep::asleep(state, i))
+            .map(|(_, b)| (b.x, b.q))
+    }
+
     fn unchanged(&self, state: &State) -> bool {
-        let mut sleeping = state
-            .bodies
-            .iter()
-            .enumerate()
-            .filter(|&(i, _)| sleep::asleep(state, i));
-        self.tags == state.sleep_tag
-            && self
-                .poses
-                .iter()
-                .all(|p| sleeping.next().is_some_and(|(_, b)| *p == (b.x, b.q)))
-            && sleeping.next().is_none()
+        self.tags == state.sleep_tag && self.poses.iter().copied().eq(Asleep::poses(state))
     }
 }
 
@@ -102,11 +99,7 @@ pub fn max_penetration(
         asleep.tags.clear();
         asleep.tags.extend_from_slice(&state.sleep_tag);
         asleep.poses.clear();
-        asleep.poses.extend(
-            (state.bodies.iter().enumerate())
-                .filter(|&(i, _)| sleep::asleep(state, i))
-                .map(|(_, b)| (b.x, b.q)),
-        );
+        asleep.poses.extend(Asleep::poses(state));
     }
     detect(model, state, listing(), Keep::Awake, collision, scratch);
     deepest(scratch).max(asleep.deepest)

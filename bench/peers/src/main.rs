@@ -51,8 +51,8 @@ struct Args {
     /// Our first tolerance also with sleeping at these thresholds,
     /// `LINEAR,ANGULAR` (m/s, rad/s): `0.1,2` is about Rapier's rule for
     /// these spheres (no point faster than 0.1 m/s over a step).
-    #[arg(long, value_delimiter = ',')]
-    ours_sleep_speeds: Vec<f64>,
+    #[arg(long, value_parser = cosim_server::bench::pile::sleep_speeds)]
+    ours_sleep_speeds: Option<cosim_shared::scene::SleepDesc>,
     /// Rapier's iteration counts (each with sleeping off and on).
     #[arg(long, value_delimiter = ',', default_value = "1,4,8,16")]
     rapier_iterations: Vec<usize>,
@@ -68,10 +68,6 @@ struct Args {
 fn piles(args: &Args) -> ExitCode {
     use cosim_server::bench::pile::Settings;
     use cosim_shared::scene::SleepDesc;
-    if !matches!(args.ours_sleep_speeds.len(), 0 | 2) {
-        eprintln!("--ours-sleep-speeds: LINEAR,ANGULAR, two speeds");
-        return ExitCode::FAILURE;
-    }
     // The pile scene's own rule at each tolerance.
     let rule = cosim_server::bench::pile::pgs;
     let settings = Settings {
@@ -91,12 +87,8 @@ fn piles(args: &Args) -> ExitCode {
                 if k == 0 && !args.no_ours_sleep {
                     sleeps.push(Some(SleepDesc::default()));
                 }
-                if let (0, &[linear_speed, angular_speed]) = (k, &args.ours_sleep_speeds[..]) {
-                    sleeps.push(Some(SleepDesc {
-                        linear_speed,
-                        angular_speed,
-                        ..Default::default()
-                    }));
+                if k == 0 && args.ours_sleep_speeds.is_some() {
+                    sleeps.push(args.ours_sleep_speeds);
                 }
                 for sleep in sleeps {
                     let r = pile::ours(

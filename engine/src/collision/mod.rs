@@ -271,11 +271,10 @@ pub fn detect(
         (Keep::Awake, false) => Keep::Every,
         (k, _) => k,
     };
-    let awake = |i: usize| !sleep::asleep(state, i);
-    let kept = |i: usize, j: Option<usize>| match keep {
+    let kept = |i: usize, b: Counterpart| match keep {
         Keep::Every => true,
-        Keep::Awake => awake(i) || j.is_some_and(awake),
-        Keep::Asleep => !awake(i) && !j.is_some_and(awake),
+        Keep::Awake => !sleep::unlisted(state, i, b),
+        Keep::Asleep => sleep::unlisted(state, i, b),
     };
     let all = matches!(listing, Listing::All);
     // The gap up to which a contact is listed: none beyond for `All`.
@@ -289,11 +288,14 @@ pub fn detect(
     let bound = |i: usize| model.bodies[i].shape.bounding_radius();
     for i in 0..model.bodies.len() {
         // A body welded to the world is the world's (`Model::weld`).
-        if model.weld[i] == crate::model::WELDED_TO_WORLD || !kept(i, None) {
+        if model.weld[i] == crate::model::WELDED_TO_WORLD {
             continue;
         }
         let x = state.bodies[i].x;
         for (p, plane) in model.planes.iter().enumerate() {
+            if !kept(i, Counterpart::Plane(p)) {
+                continue;
+            }
             let w = within(listing.reach(i));
             // The bounding sphere's gap bounds every feature's from below.
             if plane.normal.dot(&x) - plane.offset - bound(i) > w {
@@ -306,7 +308,7 @@ pub fn detect(
         return;
     }
     let n = model.bodies.len();
-    let apart = |&(i, j): &(usize, usize)| model.may_touch(i, j) && kept(i, Some(j));
+    let apart = |&(i, j): &(usize, usize)| model.may_touch(i, j) && kept(i, Counterpart::Body(j));
     if all {
         for i in 0..n {
             for j in i + 1..n {
@@ -326,7 +328,7 @@ pub fn detect(
         reach,
         listing.margin(),
         // Only the awake bodies look for partners when those are kept.
-        |i| keep != Keep::Awake || awake(i),
+        |i| keep != Keep::Awake || !sleep::asleep(state, i),
         pairs,
     );
     for &(i, j) in pairs.iter().filter(|p| apart(p)) {

@@ -114,6 +114,24 @@ pub fn scene(n: usize, dt: f64, nd: usize, solver: &str, steps: u64, seed: u64) 
         .unwrap_or_else(|e| panic!("the pile scene is valid: {e}"))
 }
 
+/// Sleeping at `LINEAR,ANGULAR` (m/s, rad/s, both positive), `after` at
+/// its default: the `--sleep-speeds` options of `bench pile` and of the
+/// peers' pile.
+pub fn sleep_speeds(s: &str) -> Result<SleepDesc, String> {
+    let parse = |t: &str| match t.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("`{t}` is not a positive speed")),
+    };
+    match s.split(',').collect::<Vec<_>>()[..] {
+        [l, a] => Ok(SleepDesc {
+            linear_speed: parse(l)?,
+            angular_speed: parse(a)?,
+            ..Default::default()
+        }),
+        _ => Err(format!("`{s}` is not LINEAR,ANGULAR")),
+    }
+}
+
 /// How a pile is run (`bench pile`'s options).
 #[derive(Debug, Clone)]
 pub struct Settings {

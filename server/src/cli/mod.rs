@@ -186,8 +186,8 @@ pub enum BenchWhat {
         /// rad/s; implies --sleep). Rapier's rule amounts to about
         /// `0.1,2` for these spheres: a body sleeps when no point of it
         /// moved faster than 0.1 m/s over a step.
-        #[arg(long, value_parser = speed_pair)]
-        sleep_speeds: Option<(f64, f64)>,
+        #[arg(long, value_parser = crate::bench::pile::sleep_speeds)]
+        sleep_speeds: Option<cosim_shared::scene::SleepDesc>,
         /// Also write the table to this file.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -504,14 +504,7 @@ pub fn main() -> ExitCode {
                 },
                 seed,
                 trace,
-                sleep: match sleep_speeds {
-                    Some((linear_speed, angular_speed)) => Some(cosim_shared::scene::SleepDesc {
-                        linear_speed,
-                        angular_speed,
-                        ..Default::default()
-                    }),
-                    None => sleep.then(cosim_shared::scene::SleepDesc::default),
-                },
+                sleep: sleep_speeds.or(sleep.then(Default::default)),
             };
             let rows: Vec<_> = n.iter().map(|&n| pile::run(n, &settings)).collect();
             let table = format!(
@@ -651,16 +644,4 @@ fn print_table(
         }
     }
     ExitCode::SUCCESS
-}
-
-/// `LINEAR,ANGULAR`: two positive speeds (`bench pile --sleep-speeds`).
-fn speed_pair(s: &str) -> Result<(f64, f64), String> {
-    let parse = |t: &str| match t.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!("`{t}` is not a positive speed")),
-    };
-    match s.split(',').collect::<Vec<_>>()[..] {
-        [l, a] => Ok((parse(l)?, parse(a)?)),
-        _ => Err(format!("`{s}` is not LINEAR,ANGULAR")),
-    }
 }
