@@ -93,9 +93,18 @@ pub struct InvMass {
 }
 
 /// World-frame inverse masses of all bodies, for this step's orientations.
+/// A sleeping body's are zero: it is static for the step, and a late
+/// contact with an awake body (`sleep.rs`) cannot move it.
 pub fn inverse_masses(model: &Model, state: &State, out: &mut Vec<InvMass>) {
     out.clear();
-    for (b, s) in model.bodies.iter().zip(&state.bodies) {
+    for (i, (b, s)) in model.bodies.iter().zip(&state.bodies).enumerate() {
+        if crate::sleep::asleep(state, i) {
+            out.push(InvMass {
+                inv_m: 0.0,
+                inv_i: Matrix3::zeros(),
+            });
+            continue;
+        }
         let r = s.q.to_rotation_matrix();
         out.push(InvMass {
             inv_m: b.inv_mass,
@@ -116,6 +125,10 @@ pub fn free_velocity(
     nu_free.clear();
     nu_free.resize(6 * model.bodies.len(), 0.0);
     for (i, (b, s)) in model.bodies.iter().zip(&state.bodies).enumerate() {
+        // A sleeping body's stays zero (`Workspace::select`).
+        if crate::sleep::asleep(state, i) {
+            continue;
+        }
         let (imp_lin, imp_ang) = inputs.body_impulse[i];
         let p_lin = h * (model.params.gravity * b.mass + b.force) + imp_lin;
         // Gyroscopic term w x J w with the world-frame inertia (zero for a

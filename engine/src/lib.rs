@@ -189,8 +189,12 @@ struct Workspace {
     reach: Vec<f64>,
     kept: Vec<(usize, bool)>,
     /// The warm starts of sleeping islands' contacts, kept while they are
-    /// not listed (`record_impulses`).
+    /// not listed (`record_impulses`), and the sleep tags they were picked
+    /// under (empty: to pick again, as after `Engine::set_state`).
     sleeping_warm: Vec<WarmContact>,
+    sleeping_tags: Vec<u32>,
+    /// Scratch of `record_impulses`: the warm starts merged.
+    merged_warm: Vec<WarmContact>,
     islands: island::Islands,
     /// The step's rows by island, solved each on its own, and the last
     /// solve's islands (the step report's, once the step succeeded).
@@ -227,15 +231,8 @@ impl Workspace {
             }),
         );
         self.detect(model, state);
+        // Zero for a sleeping body: static for the step.
         applied::inverse_masses(model, state, &mut self.minv);
-        // A sleeping body is static for the step: a late contact with an
-        // awake body (`sleep.rs`) cannot move it.
-        for (i, m) in self.minv.iter_mut().enumerate() {
-            if sleep::asleep(state, i) {
-                m.inv_m = 0.0;
-                m.inv_i = nalgebra::Matrix3::zeros();
-            }
-        }
     }
 
     fn detect(&mut self, model: &Model, state: &State) {
@@ -274,6 +271,10 @@ impl Workspace {
         }
         let mut grown = false;
         for (i, r) in self.reach.iter_mut().enumerate() {
+            // A sleeping body does not move: its speed is zero.
+            if sleep::asleep(state, i) {
+                continue;
+            }
             let speed = match speeds {
                 Speeds::Free => prune::surface_speed(model, i, Some(state), &self.nu_free),
                 Speeds::New => prune::surface_speed(model, i, None, &self.nu),
@@ -383,6 +384,8 @@ impl Engine {
         std::mem::swap(&mut mine.warm_contacts, &mut state.warm_contacts);
         self.state = state;
         self.prepared = false;
+        // Its warm starts are not the ones the sleeping part was picked from.
+        self.ws.sleeping_tags.clear();
     }
 
     /// Tolerance, iteration cap and relaxation of the iterative solver.
@@ -989,15 +992,23 @@ impl Engine {
             .extend(m.z[..m.lcp_size()].iter().map(|&x| x > 0.0));
         // A sleeping island's contacts are not listed: their warm starts
         // stay (ascending id), merged back below, so that a woken island
-        // starts from its impulses, not from zero.
-        ws.sleeping_warm.clear();
-        if sleep::any_asleep(&self.state) {
-            let (model, state) = (&self.model, &self.state);
-            ws.sleeping_warm
-                .extend(state.warm_contacts.iter().filter(|w| {
-                    let (a, b) = model.contact_bodies(w.id);
-                    sleep::unlisted(state, a, b)
-                }));
+        // starts from its impulses, not from zero. While no body slept or
+        // woke since they were picked, they are the ones picked last step:
+        // the last step's listed contacts each had an awake body and still
+        // have, the unlisted ones still have none. (Picking them again
+        // looked up every contact's bodies: a fifth of the step of a
+        // sleeping pile.)
+        if ws.sleeping_tags != self.state.sleep_tag {
+            ws.sleeping_warm.clear();
+            if sleep::any_asleep(&self.state) {
+                let (model, state) = (&self.model, &self.state);
+                ws.sleeping_warm
+                    .extend(state.warm_contacts.iter().filter(|w| {
+                        let (a, b) = model.contact_bodies(w.id);
+                        sleep::unlisted(state, a, b)
+                    }));
+            }
+            ws.sleeping_tags.clone_from(&self.state.sleep_tag);
         }
         // Filled below in the LCP's contact order, which is ascending id.
         self.state.warm_contacts.clear();
@@ -1063,11 +1074,24 @@ impl Engine {
             self.state.warm_contacts.push(warm);
         }
         if !ws.sleeping_warm.is_empty() {
-            let warm = &mut self.state.warm_contacts;
-            warm.extend_from_slice(&ws.sleeping_warm);
-            // Distinct ids (a listed contact has an awake body); unstable:
-            // it sorts in place, without a buffer.
-            warm.sort_unstable_by_key(|w| w.id);
+            // Both ascending, with distinct ids (a listed contact has an
+            // awake body): merged.
+            let (listed, asleep) = (&self.state.warm_contacts, &ws.sleeping_warm);
+            let merged = &mut ws.merged_warm;
+            merged.clear();
+            let (mut i, mut j) = (0, 0);
+            while i < listed.len() && j < asleep.len() {
+                if listed[i].id < asleep[j].id {
+                    merged.push(listed[i]);
+                    i += 1;
+                } else {
+                    merged.push(asleep[j]);
+                    j += 1;
+                }
+            }
+            merged.extend_from_slice(&listed[i..]);
+            merged.extend_from_slice(&asleep[j..]);
+            std::mem::swap(&mut self.state.warm_contacts, merged);
         }
     }
 

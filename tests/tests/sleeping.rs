@@ -169,6 +169,22 @@ fn contact_ids_name_their_bodies_back() {
             assert_eq!((m.contact_bodies(id), m.contact_feature(id)), ((a, b), 0));
         }
     }
+    // Every pair of a 3,001-sphere pile with five planes, at its first
+    // and last feature: the closed-form inverse's rounding is corrected
+    // at every row boundary.
+    let m = Model::from_scene(&cosim_server::bench::pile::scene(
+        3001, 0.01, 4, "auto", 1, 1,
+    ));
+    let (n, last) = (m.bodies.len(), m.features - 1);
+    for a in 0..n {
+        let planes = (0..m.planes.len()).map(Counterpart::Plane);
+        for b in planes.chain((a + 1..n).map(Counterpart::Body)) {
+            for f in [0, last] {
+                let id = m.contact_id(a, b, f);
+                assert_eq!((m.contact_bodies(id), m.contact_feature(id)), ((a, b), f));
+            }
+        }
+    }
 }
 
 /// A sleeping island keeps its contacts' warm starts (they are not listed
@@ -326,4 +342,30 @@ fn a_sleeping_pile_reports_the_penetration_of_every_contact() {
     }
     // Asleep, and awake again, for a part of those steps each.
     assert!((50..300).contains(&asleep), "{asleep} steps asleep");
+}
+
+/// A state set on a running engine carries its own sleeping warm starts
+/// on, even under the sleep tags the engine ran with (the engine keeps the
+/// sleeping part of the warm starts while no body sleeps or wakes, and a
+/// restored state is another list).
+#[test]
+fn a_restored_state_carries_its_own_sleeping_warm_starts() {
+    let mut e = Engine::new(scene(None, SLEEP));
+    run_until_asleep(&mut e, 3);
+    // Steps with the same tags: the kept part is in use.
+    for _ in 0..3 {
+        assert!(e.step().ok());
+    }
+    let mut s = e.state().clone();
+    assert!(s.warm_contacts.iter().any(|w| w.normal > 0.0));
+    for w in &mut s.warm_contacts {
+        w.normal *= 2.0;
+    }
+    e.set_state(s.clone());
+    let r = e.step();
+    assert!(r.ok() && r.sleeping == 3, "{r:?}");
+    // Only the faller is awake, far from everything: no contact is listed,
+    // and every warm start is a sleeping one, carried on as restored.
+    assert_eq!(r.lcp_size, 0, "{r:?}");
+    assert_eq!(e.state().warm_contacts, s.warm_contacts);
 }

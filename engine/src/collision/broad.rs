@@ -70,7 +70,9 @@ impl Broad {
         out: &mut Vec<(usize, usize)>,
     ) {
         out.clear();
-        if n < 2 {
+        // Nothing to look for: no grid (a sleeping pile's step spent a
+        // third of its time making it).
+        if n < 2 || !(0..n).any(&active) {
             return;
         }
         let grown = (0..n).fold(0.0f64, |m, i| m.max(r(i) + reach(i)));
