@@ -54,6 +54,13 @@ fn cell_of(x: &Vector3<f64>, size: f64) -> [i64; 3] {
     ]
 }
 
+/// Up to this many active bodies, each is tested against every body
+/// instead of making the grid: `A n` distance tests against the grid's
+/// key per body and sort, for the same pairs (the same test decides). A
+/// world asleep but for a few bodies (a falling one, a robot's links)
+/// then pays no sort.
+const FEW_ACTIVE: usize = 8;
+
 impl Broad {
     /// Fills `out` with every pair `(a, b)`, `a < b`, of the `n` spheres
     /// (centres `x`, radii `r`) with at least one `active` body whose gap
@@ -73,6 +80,28 @@ impl Broad {
         // Nothing to look for: no grid (a sleeping pile's step spent a
         // third of its time making it).
         if n < 2 || !(0..n).any(&active) {
+            return;
+        }
+        // Lists `(a, b)` for active `a` at `xa` when `b` is within reach:
+        // the one test of both ways to find candidates.
+        let test = |a: usize, xa: &Vector3<f64>, b: usize, out: &mut Vec<(usize, usize)>| {
+            // An active partner before `a` listed the pair.
+            if b == a || (b < a && active(b)) {
+                return;
+            }
+            let gap = (x(b) - xa).norm() - r(a) - r(b);
+            if gap <= reach(a) + reach(b) + margin {
+                out.push((a.min(b), a.max(b)));
+            }
+        };
+        if (0..n).filter(|&i| active(i)).take(FEW_ACTIVE + 1).count() <= FEW_ACTIVE {
+            for a in (0..n).filter(|&a| active(a)) {
+                let xa = x(a);
+                for b in 0..n {
+                    test(a, &xa, b, out);
+                }
+            }
+            out.sort_unstable();
             return;
         }
         let grown = (0..n).fold(0.0f64, |m, i| m.max(r(i) + reach(i)));
@@ -106,15 +135,7 @@ impl Broad {
                             if ck > to {
                                 break;
                             }
-                            let b = b as usize;
-                            // An active partner before `a` listed the pair.
-                            if b == a || (b < a && active(b)) {
-                                continue;
-                            }
-                            let gap = (x(b) - xa).norm() - r(a) - r(b);
-                            if gap <= reach(a) + reach(b) + margin {
-                                out.push((a.min(b), a.max(b)));
-                            }
+                            test(a, &xa, b as usize, out);
                         }
                     }
                 }
@@ -158,8 +179,13 @@ mod tests {
                 .collect();
             let margin = 1e-3;
             // Every body active, then about a third of them (pairs of two
-            // inactive bodies are not wanted).
-            for active in [|_: usize| true, |i: usize| i % 3 == 1] {
+            // inactive bodies are not wanted), then six: fewer than
+            // `FEW_ACTIVE`, each tested against every body.
+            for active in [
+                |_: usize| true,
+                |i: usize| i % 3 == 1,
+                |i: usize| i.is_multiple_of(50),
+            ] {
                 broad.pairs(
                     300,
                     |i| x[i],
