@@ -113,7 +113,8 @@ pub fn inverse_masses(model: &Model, state: &State, out: &mut Vec<InvMass>) {
     }
 }
 
-/// `nu_free = nu + M^-1 p_app`, laid out `[v_0, w_0, v_1, w_1, ...]`.
+/// `nu_free = nu + M^-1 p_app`, laid out `[v_0, w_0, v_1, w_1, ...]`;
+/// zero for a sleeping body.
 pub fn free_velocity(
     model: &Model,
     state: &State,
@@ -125,7 +126,9 @@ pub fn free_velocity(
     nu_free.clear();
     nu_free.resize(6 * model.bodies.len(), 0.0);
     for (i, (b, s)) in model.bodies.iter().zip(&state.bodies).enumerate() {
-        // A sleeping body's stays zero (`Workspace::select`).
+        // A sleeping body's stays zero: it is static for the step (and
+        // not on a joint, whose efforts are added below; with its zero
+        // inverse mass they would add zero).
         if crate::sleep::asleep(state, i) {
             continue;
         }

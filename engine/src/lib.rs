@@ -308,12 +308,8 @@ impl Workspace {
     /// the LCP: `prepare` with the inputs held so far, `solve` with the
     /// step's own.
     fn select(&mut self, model: &Model, state: &State, inputs: &Inputs) {
+        // Zero for a sleeping body: static for the step.
         applied::free_velocity(model, state, inputs, &self.minv, &mut self.nu_free);
-        for (i, nu) in self.nu_free.chunks_exact_mut(6).enumerate() {
-            if sleep::asleep(state, i) {
-                nu.fill(0.0);
-            }
-        }
         if self.widen(model, state, Speeds::Free) {
             // The contact indices changed: a matrix made for the old list
             // would be taken for the new one.

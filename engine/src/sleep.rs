@@ -12,7 +12,8 @@
 //! inverse mass, no position update), and the contacts among them and
 //! with the planes are not listed (left out before their narrow phase,
 //! `collision::Keep`): the island costs its keys in the broad phase's
-//! sort, a comparison of its poses with those its penetration was
+//! sort (none while at most `collision::broad::FEW_ACTIVE` bodies are
+//! awake), a comparison of its poses with those its penetration was
 //! measured at (`measure::Asleep`), and nothing else, and its state does
 //! not change by a bit.
 //!

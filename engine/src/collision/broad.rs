@@ -19,8 +19,9 @@
 //!
 //! Only pairs with an active body are wanted (a pair of two sleeping
 //! bodies is not listed, `sleep.rs`): every body is in the grid, but only
-//! the active ones look up their neighbours, so a sleeping pile costs the
-//! sort of its keys and no lookups.
+//! the active ones look up their neighbours; with no active body there is
+//! no grid, and with at most `FEW_ACTIVE` each is tested against every
+//! body instead.
 //!
 //! Cost: sorting N keys and 9 lookups per active body; no allocation once
 //! the buffers have seen the largest scene. A scene of very unequal spheres (one of
@@ -77,9 +78,11 @@ impl Broad {
         out: &mut Vec<(usize, usize)>,
     ) {
         out.clear();
+        // How many look for partners, counted up to one past `FEW_ACTIVE`.
+        let looking = (0..n).filter(|&i| active(i)).take(FEW_ACTIVE + 1).count();
         // Nothing to look for: no grid (a sleeping pile's step spent a
         // third of its time making it).
-        if n < 2 || !(0..n).any(&active) {
+        if n < 2 || looking == 0 {
             return;
         }
         // Lists `(a, b)` for active `a` at `xa` when `b` is within reach:
@@ -94,7 +97,7 @@ impl Broad {
                 out.push((a.min(b), a.max(b)));
             }
         };
-        if (0..n).filter(|&i| active(i)).take(FEW_ACTIVE + 1).count() <= FEW_ACTIVE {
+        if looking <= FEW_ACTIVE {
             for a in (0..n).filter(|&a| active(a)) {
                 let xa = x(a);
                 for b in 0..n {
