@@ -4,7 +4,7 @@
 //! safety net, and the accuracy stays ours: overlaps far below a
 //! millimetre, nothing leaves the box, the pile comes to rest.
 
-use cosim_server::bench::pile::{self, Settings};
+use cosim_server::bench::pile::{self, Settings, Shape};
 
 /// 500 steps of 10 ms, `auto`, the pile's rule at `tolerance` (m/s).
 fn settings(tolerance: f64) -> Settings {
@@ -16,7 +16,24 @@ fn settings(tolerance: f64) -> Settings {
         seed: 1,
         trace: 0,
         sleep: None,
+        shape: Shape::Cube,
     }
+}
+
+#[test]
+fn a_wide_layered_pile_settles_too() {
+    // `bench pile --layers`: 400 spheres in two layers of 15 x 15 (less
+    // the last 50), the walls 0.05 m outside them.
+    let o = pile::run(
+        400,
+        &Settings {
+            shape: Shape::Layers(2),
+            ..settings(1e-2)
+        },
+    );
+    assert_eq!((o.failed, o.capped, o.escaped), (0, 0, 0), "{o:?}");
+    // As the cube pile's bound below: ten times what the rule allows.
+    assert!(o.worst_overlap < 1e-3, "{o:?}");
 }
 
 #[test]
@@ -65,7 +82,7 @@ fn a_steps_sweeps_stay_within_the_cap_over_its_re_solves() {
     use cosim_server::engine::solver::PgsParams;
     use cosim_server::engine::{Engine, Model};
     let cap = 2;
-    let text = pile::text_with(1000, 0.01, 4, "pgs", 200, 1, None);
+    let text = pile::text_shaped(1000, pile::Shape::Cube, 0.01, 4, "pgs", 200, 1, None);
     let scene = cosim_shared::Scene::parse(&text, "<pile>").expect("valid scene");
     let mut model = Model::from_scene(&scene);
     model.params.fallback = false;

@@ -233,7 +233,16 @@ fn a_sleeping_island_keeps_its_warm_start() {
 #[test]
 fn a_pile_under_the_residual_rule_falls_asleep() {
     use cosim_server::bench::pile;
-    let text = pile::text_with(100, 0.01, 4, "auto", 1000, 1, Some(Default::default()));
+    let text = pile::text_shaped(
+        100,
+        pile::Shape::Cube,
+        0.01,
+        4,
+        "auto",
+        1000,
+        1,
+        Some(Default::default()),
+    );
     let scene = cosim_shared::Scene::parse(&text, "<pile>").unwrap();
     let mut e = Engine::new(Model::from_scene(&scene));
     // Measured: all 100 asleep at step 478 (208 before the cone search of
@@ -310,8 +319,16 @@ fn a_sleeping_pile_reports_the_penetration_of_every_contact() {
     use cosim_server::engine::collision::{detect, Keep, Listing};
     // The pile, and a sphere falling from 1 km above it: awake throughout
     // (it lands after about 14 s; the test ends before 8 s).
-    let text = pile::text_with(100, 0.01, 4, "auto", 1000, 1, Some(Default::default()))
-        + &sphere("faller", 0.05, 1.0, [0.0, 0.0, 1000.0], [0.0; 3], 0.5, 0.0);
+    let text = pile::text_shaped(
+        100,
+        pile::Shape::Cube,
+        0.01,
+        4,
+        "auto",
+        1000,
+        1,
+        Some(Default::default()),
+    ) + &sphere("faller", 0.05, 1.0, [0.0, 0.0, 1000.0], [0.0; 3], 0.5, 0.0);
     let model = Model::from_scene(&cosim_shared::Scene::parse(&text, "<pile>").unwrap());
     let mut e = Engine::new(model.clone());
     let (mut scratch, mut geoms) = Default::default();

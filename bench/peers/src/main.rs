@@ -34,6 +34,10 @@ struct Args {
     /// and Rapier (1, 4, 8, 16 iterations; sleeping on and off).
     #[arg(long, value_delimiter = ',')]
     pile: Vec<usize>,
+    /// Lay each pile out in this many layers (`bench pile --layers`)
+    /// instead of as a cube.
+    #[arg(long)]
+    pile_layers: Option<usize>,
     /// Steps of each pile run.
     #[arg(long, default_value_t = 500)]
     pile_steps: u64,
@@ -66,7 +70,7 @@ struct Args {
 }
 
 fn piles(args: &Args) -> ExitCode {
-    use cosim_server::bench::pile::Settings;
+    use cosim_server::bench::pile::{Settings, Shape};
     use cosim_shared::scene::SleepDesc;
     // The pile scene's own rule at each tolerance.
     let rule = cosim_server::bench::pile::pgs;
@@ -78,6 +82,9 @@ fn piles(args: &Args) -> ExitCode {
         seed: 1,
         trace: 0,
         sleep: None,
+        shape: args
+            .pile_layers
+            .map_or(Shape::Cube, |l| Shape::Layers(l.max(1))),
     };
     let mut rows = Vec::new();
     for &n in &args.pile {

@@ -60,7 +60,16 @@ pub fn ours(n: usize, settings: &Settings) -> Row {
 
 /// Rapier on the same pile with `iterations` solver iterations.
 pub fn rapier(n: usize, settings: &Settings, iterations: usize, sleep: bool) -> Row {
-    let text = pile::text(n, settings.dt, 4, "pgs", settings.steps, settings.seed);
+    let text = pile::text_shaped(
+        n,
+        settings.shape,
+        settings.dt,
+        4,
+        "pgs",
+        settings.steps,
+        settings.seed,
+        None,
+    );
     let scene = Scene::parse(&text, "<pile>").unwrap_or_else(|e| panic!("pile scene: {e}"));
     let model = Model::from_scene(&scene);
     let mut w = rapier::build(&scene, sleep);
@@ -84,7 +93,7 @@ pub fn rapier(n: usize, settings: &Settings, iterations: usize, sleep: bool) -> 
     }
     let total: f64 = times.iter().sum();
     times.sort_by(f64::total_cmp);
-    let half = pile::half_width(n);
+    let half = settings.shape.half_width(n);
     let kinetic = model
         .bodies
         .iter()
@@ -136,12 +145,13 @@ fn copy_state(w: &rapier::World, state: &mut State) {
 /// The rows as a markdown table.
 pub fn table(rows: &[Row], settings: &Settings) -> String {
     let mut t = format!(
-        "Pile of spheres (r = {} m, mu = 0.5), h = {}, n_d = 4 (ours), one thread each. \
+        "Pile of spheres (r = {} m, mu = 0.5; {}), h = {}, n_d = 4 (ours), one thread each. \
          Ours: solver auto (PGS above 600 unknowns) stopped by the constraint violation \
          (the residual rule) at the tolerance shown.\n\n\
          | engine | setting | N | steps | ms/step (median) | s total | worst overlap (mm) | escaped | KE end (J) | asleep |\n\
          |---|---|---|---|---|---|---|---|---|---|\n",
         pile::RADIUS,
+        settings.shape,
         settings.dt
     );
     for r in rows {

@@ -1,9 +1,9 @@
 //! The pile of issue 14: N spheres (r = 0.05 m, m = 1 kg, mu = 0.5) on a
 //! grid 0.12 m apart with 1 cm of seeded jitter, dropped into a box of a
 //! floor and four walls. For N = 100 it is the issue's 5 x 5 x 4 grid in
-//! walls 0.35 m from the centre; a larger N keeps the grid's footprint
-//! square (side `ceil(sqrt(N / layers))`, four layers per 100 spheres'
-//! worth of height) and the walls 0.05 m outside it.
+//! walls 0.35 m from the centre; a larger N is a cube of spheres (10 x 10 x
+//! 10 at 1,000, the issue's) or, with [`Shape::Layers`], a square of that
+//! many layers that widens with N, and the walls 0.05 m outside it.
 
 use crate::bench::robust::Rng;
 use crate::bench::text::{plane, sphere};
@@ -14,24 +14,57 @@ use cosim_shared::Scene;
 /// Sphere radius (m) of the pile.
 pub const RADIUS: f64 = 0.05;
 
-/// The grid of `n` spheres: side of the square layer and the layer count.
-fn grid(n: usize) -> (usize, usize) {
-    if n <= 100 {
-        return (5, n.div_ceil(25));
-    }
-    // Layers about as many as the side, as a cube (10 x 10 x 10 for 1,000).
-    let side = (n as f64).cbrt().ceil() as usize;
-    (side, n.div_ceil(side * side))
+/// How a pile of more than 100 spheres is laid out.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Shape {
+    /// Layers about as many as the side (10 x 10 x 10 for 1,000): the pile
+    /// grows taller with N, and so does the path its load takes.
+    #[default]
+    Cube,
+    /// This many layers (at least one), the square widening with N: a pile
+    /// as tall at every N, which separates the cost of N from that of
+    /// height (a tall pile needs more sweeps to the same tolerance).
+    Layers(usize),
 }
 
-/// The pile's half width: the walls' distance from the centre (m).
-pub fn half_width(n: usize) -> f64 {
-    let (side, _) = grid(n);
-    if n <= 100 {
-        0.35
-    } else {
-        0.5 * 0.12 * side as f64 + 0.05
+impl Shape {
+    /// The grid of `n` spheres: side of the square layer and the layer count.
+    fn grid(self, n: usize) -> (usize, usize) {
+        if n <= 100 && self == Shape::Cube {
+            return (5, n.div_ceil(25));
+        }
+        let side = match self {
+            Shape::Cube => (n as f64).cbrt().ceil() as usize,
+            Shape::Layers(l) => (n as f64 / l.max(1) as f64).sqrt().ceil() as usize,
+        }
+        .max(1);
+        (side, n.div_ceil(side * side))
     }
+
+    /// The pile's half width: the walls' distance from the centre (m).
+    pub fn half_width(self, n: usize) -> f64 {
+        let (side, _) = self.grid(n);
+        if n <= 100 && self == Shape::Cube {
+            0.35
+        } else {
+            0.5 * 0.12 * side as f64 + 0.05
+        }
+    }
+}
+
+impl std::fmt::Display for Shape {
+    /// As the tables name it: `cubes`, `10 layers`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Shape::Cube => write!(f, "cubes"),
+            Shape::Layers(l) => write!(f, "{l} layers"),
+        }
+    }
+}
+
+/// The cube pile's half width: the walls' distance from the centre (m).
+pub fn half_width(n: usize) -> f64 {
+    Shape::Cube.half_width(n)
 }
 
 /// A pile's stopping rule for PGS: the constraint violation within 1 cm/s,
@@ -55,12 +88,15 @@ pub fn pgs(tolerance: f64) -> PgsParams {
 /// The scene text of a pile of `n` spheres, with step `dt` and friction
 /// directions `nd`, solver `solver` (`"pgs"`, `"lemke"`, `"auto"`).
 pub fn text(n: usize, dt: f64, nd: usize, solver: &str, steps: u64, seed: u64) -> String {
-    text_with(n, dt, nd, solver, steps, seed, None)
+    text_shaped(n, Shape::Cube, dt, nd, solver, steps, seed, None)
 }
 
-/// [`text`], with sleeping at `sleep`'s thresholds when given.
-pub fn text_with(
+/// [`text`] laid out as `shape` says, with sleeping at `sleep`'s
+/// thresholds when given.
+#[allow(clippy::too_many_arguments)]
+pub fn text_shaped(
     n: usize,
+    shape: Shape,
     dt: f64,
     nd: usize,
     solver: &str,
@@ -68,8 +104,8 @@ pub fn text_with(
     seed: u64,
     sleep: Option<SleepDesc>,
 ) -> String {
-    let (side, _) = grid(n);
-    let w = half_width(n);
+    let (side, _) = shape.grid(n);
+    let w = shape.half_width(n);
     let mut rng = Rng::new(seed);
     let mut t = format!(
         "[sim]\nname = \"pile-{n}\"\ndt = {dt:e}\nsteps = {steps}\nfriction_directions = {nd}\nsolver = \"{solver}\"\n\n"
@@ -144,6 +180,7 @@ pub struct Settings {
     pub trace: u64,
     /// Islands at rest sleep at these thresholds (`[sim.sleep]`).
     pub sleep: Option<SleepDesc>,
+    pub shape: Shape,
 }
 
 /// One pile run's figures (`bench pile`).
@@ -190,9 +227,11 @@ pub fn run(n: usize, settings: &Settings) -> Outcome {
         seed,
         trace,
         sleep,
+        shape,
     } = *settings;
-    let scene = Scene::parse(&text_with(n, dt, 4, solver, steps, seed, sleep), "<pile>")
-        .unwrap_or_else(|e| panic!("the pile scene is valid: {e}"));
+    let text = text_shaped(n, shape, dt, 4, solver, steps, seed, sleep);
+    let scene =
+        Scene::parse(&text, "<pile>").unwrap_or_else(|e| panic!("the pile scene is valid: {e}"));
     let mut e = Engine::new(Model::from_scene(&scene));
     e.set_pgs_params(pgs);
     let mut times = Vec::with_capacity(steps as usize);
@@ -251,7 +290,7 @@ pub fn run(n: usize, settings: &Settings) -> Outcome {
     work.sort_unstable();
     out.median_work = work.get(work.len() / 2).copied().unwrap_or(0);
     out.max_work = work.last().copied().unwrap_or(0);
-    let w = half_width(n);
+    let w = shape.half_width(n);
     out.escaped = e
         .state()
         .bodies
@@ -279,8 +318,9 @@ pub fn table(rows: &[Outcome], settings: &Settings) -> String {
         ),
         None => "sleeping off".into(),
     };
+    let shape = settings.shape;
     let mut t = format!(
-        "Pile of spheres (r = {RADIUS} m, mu = 0.5), h = {dt}, n_d = 4, solver {solver} \
+        "Pile of spheres (r = {RADIUS} m, mu = 0.5; {shape}), h = {dt}, n_d = 4, solver {solver} \
          (PGS: {stop:?} rule at {tol:e} m/s), {sleep}.\n\n\
          | N | steps | failed | at cap | ms/step (median) | s total | work (median / max) | worst overlap (mm) | escaped | KE end (J) | max speed end (m/s) | asleep | state B/body |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
@@ -312,11 +352,29 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_layered_pile_is_as_tall_at_every_size() {
+        for n in [100usize, 1000, 4000, 10_000] {
+            let (side, layers) = Shape::Layers(10).grid(n);
+            assert!(side * side * layers >= n && side * side * (layers - 1) < n);
+            assert!(layers <= 10, "{n}: {layers} layers");
+        }
+        assert_eq!(Shape::Layers(10).grid(1000), Shape::Cube.grid(1000));
+        assert_eq!(Shape::Layers(10).grid(4000), (20, 10));
+    }
+
+    #[test]
     fn the_pile_starts_inside_its_box_without_overlaps() {
-        for n in [100usize, 1000, 4000] {
-            let s = scene(n, 0.01, 4, "pgs", 10, 1);
+        for (n, shape) in [
+            (100usize, Shape::Cube),
+            (1000, Shape::Cube),
+            (4000, Shape::Cube),
+            (100, Shape::Layers(3)),
+            (4000, Shape::Layers(10)),
+        ] {
+            let text = text_shaped(n, shape, 0.01, 4, "pgs", 10, 1, None);
+            let s = Scene::parse(&text, "<pile>").expect("valid");
             assert_eq!(s.bodies.len(), n);
-            let w = half_width(n);
+            let w = shape.half_width(n);
             let x: Vec<[f64; 3]> = s.bodies.iter().map(|b| b.position).collect();
             for p in &x {
                 assert!(

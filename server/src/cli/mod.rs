@@ -155,6 +155,11 @@ pub enum BenchWhat {
         solver: String,
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Lay each pile out in this many layers, its square widening with
+        /// N, instead of as a cube (10 x 10 x 10 at 1,000): piles as tall
+        /// at every N.
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+        layers: Option<u64>,
         /// Print every K-th step's report to stderr.
         #[arg(long, default_value_t = 0)]
         trace: u64,
@@ -478,6 +483,7 @@ pub fn main() -> ExitCode {
                     dt,
                     solver,
                     seed,
+                    layers,
                     trace,
                     velocity_tolerance,
                     max_iterations,
@@ -505,6 +511,7 @@ pub fn main() -> ExitCode {
                 seed,
                 trace,
                 sleep: sleep_speeds.or(sleep.then(Default::default)),
+                shape: layers.map_or(pile::Shape::Cube, |l| pile::Shape::Layers(l as usize)),
             };
             let rows: Vec<_> = n.iter().map(|&n| pile::run(n, &settings)).collect();
             let table = format!(
