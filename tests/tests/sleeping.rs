@@ -224,6 +224,22 @@ fn a_sleeping_island_keeps_its_warm_start() {
     assert!(r.pivots < 50, "{} sweeps on waking", r.pivots);
 }
 
+/// The 100-sphere pile of `bench pile`, 1,000 steps, `auto`, sleeping at
+/// the scene's default thresholds.
+fn sleeping_pile() -> String {
+    use cosim_server::bench::pile;
+    pile::text_shaped(
+        100,
+        pile::Shape::Cube,
+        0.01,
+        4,
+        "auto",
+        1000,
+        1,
+        Some(Default::default()),
+    )
+}
+
 /// Under PGS's residual rule (the pile's, 1 cm/s) a step's answer leaves
 /// constraint velocities of up to the tolerance, and bodies at rest keep
 /// moving at about that: the at-rest thresholds are raised to twice the
@@ -233,16 +249,7 @@ fn a_sleeping_island_keeps_its_warm_start() {
 #[test]
 fn a_pile_under_the_residual_rule_falls_asleep() {
     use cosim_server::bench::pile;
-    let text = pile::text_shaped(
-        100,
-        pile::Shape::Cube,
-        0.01,
-        4,
-        "auto",
-        1000,
-        1,
-        Some(Default::default()),
-    );
+    let text = sleeping_pile();
     let scene = cosim_shared::Scene::parse(&text, "<pile>").unwrap();
     let mut e = Engine::new(Model::from_scene(&scene));
     // Measured: all 100 asleep at step 478 (208 before the cone search of
@@ -315,20 +322,11 @@ fn a_spinning_neighbour_that_does_not_touch_leaves_a_stack_asleep() {
 /// while the pile sleeps beside an awake body and after it wakes.
 #[test]
 fn a_sleeping_pile_reports_the_penetration_of_every_contact() {
-    use cosim_server::bench::pile;
     use cosim_server::engine::collision::{detect, Keep, Listing};
     // The pile, and a sphere falling from 1 km above it: awake throughout
     // (it lands after about 14 s; the test ends before 8 s).
-    let text = pile::text_shaped(
-        100,
-        pile::Shape::Cube,
-        0.01,
-        4,
-        "auto",
-        1000,
-        1,
-        Some(Default::default()),
-    ) + &sphere("faller", 0.05, 1.0, [0.0, 0.0, 1000.0], [0.0; 3], 0.5, 0.0);
+    let text =
+        sleeping_pile() + &sphere("faller", 0.05, 1.0, [0.0, 0.0, 1000.0], [0.0; 3], 0.5, 0.0);
     let model = Model::from_scene(&cosim_shared::Scene::parse(&text, "<pile>").unwrap());
     let mut e = Engine::new(model.clone());
     let (mut scratch, mut geoms) = Default::default();

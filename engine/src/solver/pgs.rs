@@ -296,12 +296,11 @@ pub struct Pgs {
     motor_start: Vec<u32>,
     /// Scratch of [`Pgs::prepare`]: whether a body is listed already.
     listed: Vec<bool>,
-    /// The contacts (normal rows) the last sweep changed by more than
-    /// `focus_above` (m/s), at most [`FOCUS_MAX`] of them, and how many
-    /// there were in all (see [`Pgs::focus`]).
+    /// The contacts (normal rows) the last sweep changed by more than the
+    /// residual rule's tolerance, at most [`FOCUS_MAX`] of them, and how
+    /// many there were in all (see [`Pgs::focus`]).
     focus: Vec<u32>,
     focus_count: usize,
-    focus_above: f64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -401,6 +400,12 @@ impl Pgs {
         let mut last_g2 = 0.0;
         let mut recent = [f64::INFINITY; RATE_WINDOW + 1];
         let cap = params.max_iterations.max(1);
+        // Which contacts the sweeps list for `focus`: none under the
+        // distance rule.
+        let focus_above = match params.stop {
+            Stop::Residual => params.velocity_tolerance,
+            Stop::Distance => f64::INFINITY,
+        };
         for it in 1..=cap {
             if params.momentum {
                 match self.span(g) {
@@ -421,13 +426,7 @@ impl Pgs {
                     self.nu_before[v.clone()].copy_from_slice(&nu[v]);
                 }
             }
-            self.focus.clear();
-            self.focus_count = 0;
-            self.focus_above = match params.stop {
-                Stop::Residual => params.velocity_tolerance,
-                Stop::Distance => f64::INFINITY,
-            };
-            let correction = self.sweep(p, g, params.relaxation, nu);
+            let correction = self.sweep(p, g, params.relaxation, focus_above, nu);
             recent.rotate_right(1);
             recent[0] = correction;
             let done = match params.stop {
@@ -625,11 +624,21 @@ impl Pgs {
     /// One Gauss-Seidel sweep of island `g`: its joint rows, then each
     /// contact's normal row followed at once by its friction block, so that the block's cone
     /// is the one its normal impulse just set. Returns the largest velocity
-    /// change an update made (m/s). Measured on the 100-sphere pile (300
+    /// change an update made (m/s); lists in `focus` the contacts whose
+    /// update changed one by more than `focus_above`. Measured on the 100-sphere pile (300
     /// steps, 1e-5 m/s): all normal rows before all friction blocks, 172 ms
     /// per step (median) and 67 steps at the cap; this order, 57 ms and 30;
     /// every other sweep in reverse (symmetric Gauss-Seidel), 133 ms and 46.
-    fn sweep(&mut self, p: &PgsProblem, g: usize, omega: f64, nu: &mut [f64]) -> f64 {
+    fn sweep(
+        &mut self,
+        p: &PgsProblem,
+        g: usize,
+        omega: f64,
+        focus_above: f64,
+        nu: &mut [f64],
+    ) -> f64 {
+        self.focus.clear();
+        self.focus_count = 0;
         let mut x = std::mem::take(&mut self.x);
         let mut largest = 0.0f64;
         for &k in p.groups.rows_of(g) {
@@ -638,11 +647,8 @@ impl Pgs {
                 largest = largest.max(self.update_row(p, k, omega, false, &mut x, nu));
                 continue;
             };
-            let mut change = self.update_row(p, k, omega, true, &mut x, nu);
-            if let Some(f) = self.block_of[i] {
-                change = change.max(self.update_block(p, f, i, omega, &mut x, nu));
-            }
-            if change > self.focus_above {
+            let change = self.update_contact(p, i, omega, &mut x, nu);
+            if change > focus_above {
                 self.focus_count += 1;
                 if self.focus.len() < FOCUS_MAX {
                     self.focus.push(k as u32);
@@ -694,13 +700,8 @@ impl Pgs {
         for _ in 0..FOCUS_SWEEPS {
             let mut largest = 0.0f64;
             for &k in &focus {
-                let k = k as usize;
-                let i = k - p.nb;
-                largest = largest.max(self.update_row(p, k, params.relaxation, true, &mut x, nu));
-                if let Some(f) = self.block_of[i] {
-                    largest =
-                        largest.max(self.update_block(p, f, i, params.relaxation, &mut x, nu));
-                }
+                let i = k as usize - p.nb;
+                largest = largest.max(self.update_contact(p, i, params.relaxation, &mut x, nu));
             }
             if largest <= 0.5 * params.velocity_tolerance {
                 break;
@@ -708,6 +709,25 @@ impl Pgs {
         }
         self.focus = focus;
         self.x = x;
+    }
+
+    /// Contact `i`'s update: its normal row, then at once its friction
+    /// block (whose cone is the one the normal impulse just set); the
+    /// larger velocity change of the two (m/s).
+    #[inline]
+    fn update_contact(
+        &self,
+        p: &PgsProblem,
+        i: usize,
+        omega: f64,
+        x: &mut [f64],
+        nu: &mut [f64],
+    ) -> f64 {
+        let change = self.update_row(p, p.nb + i, omega, true, x, nu);
+        match self.block_of[i] {
+            Some(f) => change.max(self.update_block(p, f, i, omega, x, nu)),
+            None => change,
+        }
     }
 
     /// Motor `k`'s update, projected on its box `[-F h, F h]`; its
