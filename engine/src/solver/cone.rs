@@ -150,9 +150,7 @@ fn decompose_with(p: [f64; 2], nd: usize, dir: impl Fn(usize) -> (f64, f64), out
     if p == [0.0, 0.0] {
         return;
     }
-    let step = std::f64::consts::TAU / nd as f64;
-    let angle = p[1].atan2(p[0]).rem_euclid(std::f64::consts::TAU);
-    let j = ((angle / step) as usize).min(nd - 1);
+    let j = sector(p, nd, &dir);
     let (c0, s0) = dir(j);
     let (c1, s1) = dir(j + 1);
     // p = a d_j + b d_j+1.
@@ -161,6 +159,37 @@ fn decompose_with(p: [f64; 2], nd: usize, dir: impl Fn(usize) -> (f64, f64), out
     let b = (c0 * p[1] - s0 * p[0]) / det;
     out[j] = a.max(0.0);
     out[(j + 1) % nd] += b.max(0.0);
+}
+
+/// The sector `j` of the polygon that holds `p` (between `d_j` and
+/// `d_j+1`): `floor(angle(p) / (2 pi / n_d))`.
+///
+/// By the signs of `d_j x p` and `p x d_j+1` where both clear `SECTOR_MARGIN`
+/// of `|p|`, else by the angle itself. Why both: `atan2` was a thirtieth of
+/// a pile's step (PGS decomposes every friction block it updates); the
+/// cross products decide alike wherever `p` is more than `SECTOR_MARGIN`
+/// radians from a sector's edge (the angle's rounding, a few 1e-16, and the
+/// table's cannot move it across), and on an edge the angle decides as it
+/// always did, so the decomposition keeps its bits.
+fn sector(p: [f64; 2], nd: usize, dir: &impl Fn(usize) -> (f64, f64)) -> usize {
+    let clear = SECTOR_MARGIN * p[0].abs().max(p[1].abs());
+    for j in 0..nd {
+        let ((c0, s0), (c1, s1)) = (dir(j), dir(j + 1));
+        if c0 * p[1] - s0 * p[0] > clear && p[0] * s1 - p[1] * c1 > clear {
+            return j;
+        }
+    }
+    sector_by_angle(p, nd)
+}
+
+/// How far (relative to `|p|`, in radians) from a sector's edge the cross
+/// products decide [`sector`].
+const SECTOR_MARGIN: f64 = 1e-9;
+
+fn sector_by_angle(p: [f64; 2], nd: usize) -> usize {
+    let step = std::f64::consts::TAU / nd as f64;
+    let angle = p[1].atan2(p[0]).rem_euclid(std::f64::consts::TAU);
+    ((angle / step) as usize).min(nd - 1)
 }
 
 /// Projection onto the second-order cone `||r_T|| <= mu r_N`, `r = [r_N,
@@ -192,6 +221,38 @@ pub fn project_disc(x: [f64; 2], cap: f64) -> [f64; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_sector_by_cross_products_is_the_sector_by_angle() {
+        // Points all around, and on and a hair beside every sector edge.
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for nd in [1, 2, 3, 4, 5, 6, 8, 12, 16, 17] {
+            let dir = |j: usize| direction(j, nd);
+            let mut points = Vec::new();
+            for _ in 0..2000 {
+                let (a, r) = (
+                    std::f64::consts::TAU * next(),
+                    10f64.powf(6.0 * next() - 3.0),
+                );
+                points.push([r * a.cos(), r * a.sin()]);
+            }
+            for j in 0..=nd {
+                let (c, s) = dir(j);
+                for eps in [0.0, 1e-15, -1e-15, 1e-10, -1e-10, 1e-8, -1e-8] {
+                    points.push([c - eps * s, s + eps * c]);
+                }
+            }
+            for p in points {
+                assert_eq!(sector(p, nd, &dir), sector_by_angle(p, nd), "{p:?} nd {nd}");
+            }
+        }
+    }
 
     #[test]
     fn polygon_projection_and_decomposition() {
