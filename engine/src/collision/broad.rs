@@ -47,7 +47,7 @@ pub struct Broad {
     /// Dense grid: the bodies by cell, each cell's in body order, with
     /// what the pair test reads gathered beside them (`Near`).
     order: Vec<Near>,
-    /// Dense grid: the bodies' `Near`s in body order.
+    /// Both grids: the bodies' `Near`s in body order.
     gathered: Vec<Near>,
 }
 
@@ -97,23 +97,15 @@ const DENSE_PER_BODY: usize = 8;
 const DENSE_EXTRA: usize = 64;
 
 /// The pair test, the one both grids and the brute force apply: `(a, b)`
-/// with `a` active at `xa` is listed when `b` is within reach (an active
-/// partner before `a` listed the pair already).
-#[allow(clippy::too_many_arguments)]
+/// with `a` active is listed when `b` is within reach (an active partner
+/// before `a` listed the pair already).
 #[inline]
-fn test(
-    a: usize,
-    xa: &Vector3<f64>,
-    ra: f64,
-    reach_a: f64,
-    b: usize,
-    nb: &Near,
-    margin: f64,
-    out: &mut Vec<(usize, usize)>,
-) {
+fn test(na: &Near, nb: &Near, margin: f64, out: &mut Vec<(usize, usize)>) {
+    let (a, b) = (na.body as usize, nb.body as usize);
     if b == a || (b < a && nb.active) {
         return;
     }
+    let (xa, ra, reach_a) = (na.x, na.r, na.reach);
     // Most candidates are a cell away: dropped on the squared distance,
     // without the root, where it clears the reach by far more than the
     // test's roundings (a few 1e-16 of the sum), so that the test below
@@ -164,16 +156,18 @@ impl Broad {
             for a in (0..n).filter(|&a| active(a)) {
                 let na = near(a);
                 for b in 0..n {
-                    test(a, &na.x, na.r, na.reach, b, &near(b), margin, out);
+                    test(&na, &near(b), margin, out);
                 }
             }
             out.sort_unstable();
             return;
         }
-        let grown = (0..n).fold(0.0f64, |m, i| m.max(r(i) + reach(i)));
+        self.gathered.clear();
+        self.gathered.extend((0..n).map(near));
+        let grown = (self.gathered.iter()).fold(0.0f64, |m, g| m.max(g.r + g.reach));
         let size = (2.0 * grown + margin).max(f64::MIN_POSITIVE);
-        if !self.dense(n, &near, size, margin, out) {
-            self.sparse(n, &near, size, margin, out);
+        if !self.dense(size, margin, out) {
+            self.sparse(size, margin, out);
         }
         out.sort_unstable();
         out.dedup();
@@ -183,16 +177,8 @@ impl Broad {
     /// of cells, filled by a counting sort (O(N), no comparisons); each
     /// active body reads the runs of its 3 x 3 columns' three cells. False
     /// (nothing listed) when the box has too many cells for the bodies.
-    fn dense(
-        &mut self,
-        n: usize,
-        near: &impl Fn(usize) -> Near,
-        size: f64,
-        margin: f64,
-        out: &mut Vec<(usize, usize)>,
-    ) -> bool {
-        self.gathered.clear();
-        self.gathered.extend((0..n).map(near));
+    fn dense(&mut self, size: f64, margin: f64, out: &mut Vec<(usize, usize)>) -> bool {
+        let n = self.gathered.len();
         let (mut lo, mut hi) = ([i64::MAX; 3], [i64::MIN; 3]);
         for g in &self.gathered {
             let c = cell_of(&g.x, size);
@@ -250,14 +236,14 @@ impl Broad {
         // its own in `order`.
         let (rows, column) = (dims[1] * dims[2], dims[2]);
         for na in self.order.iter().filter(|g| g.active) {
-            let (a, c) = (na.body as usize, na.cell as usize);
+            let c = na.cell as usize;
             for dx in [c - rows, c, c + rows] {
                 for dxy in [dx - column, dx, dx + column] {
                     // The three cells along z are consecutive.
                     let from = self.starts[dxy - 1] as usize;
                     let to = self.starts[dxy + 2] as usize;
                     for nb in &self.order[from..to] {
-                        test(a, &na.x, na.r, na.reach, nb.body as usize, nb, margin, out);
+                        test(na, nb, margin, out);
                     }
                 }
             }
@@ -267,23 +253,11 @@ impl Broad {
 
     /// The sparse grid: bodies sorted by cell key; each active body looks
     /// up its neighbour cells by binary search.
-    fn sparse(
-        &mut self,
-        n: usize,
-        near: &impl Fn(usize) -> Near,
-        size: f64,
-        margin: f64,
-        out: &mut Vec<(usize, usize)>,
-    ) {
+    fn sparse(&mut self, size: f64, margin: f64, out: &mut Vec<(usize, usize)>) {
         self.cells.clear();
-        self.cells
-            .extend((0..n).map(|i| (key(cell_of(&near(i).x, size)), i as u32)));
+        (self.cells).extend((self.gathered.iter()).map(|g| (key(cell_of(&g.x, size)), g.body)));
         self.cells.sort_unstable();
-        for a in 0..n {
-            let na = near(a);
-            if !na.active {
-                continue;
-            }
+        for na in self.gathered.iter().filter(|g| g.active) {
             let c = cell_of(&na.x, size);
             for dx in -1..=1 {
                 for dy in -1..=1 {
@@ -307,8 +281,7 @@ impl Broad {
                             if ck > to {
                                 break;
                             }
-                            let b = b as usize;
-                            test(a, &na.x, na.r, na.reach, b, &near(b), margin, out);
+                            test(na, &self.gathered[b as usize], margin, out);
                         }
                     }
                 }
