@@ -256,17 +256,21 @@ fn default_pgs_max_iterations() -> usize {
     DEFAULT_PGS_MAX_ITERATIONS
 }
 
-/// `[sim.sleep]`: Box2D's and Rapier's defaults scaled to metres.
+/// `[sim.sleep]`: Box2D v3's defaults (0.05 m/s, half a second; Rapier's
+/// are the same), judged as Box2D v3 and Jolt judge a spin, by the speed
+/// it gives the body's bounding sphere (`engine/src/sleep.rs`).
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SleepDesc {
     /// Seconds an island must stay at rest before it sleeps.
     #[serde(default = "default_sleep_after")]
     pub after: f64,
-    /// Speed (m/s) below which a body is at rest.
+    /// Speed (m/s) below which a body is at rest: its centre's, and the
+    /// speed its spin gives its bounding sphere's surface.
     #[serde(default = "default_sleep_linear")]
     pub linear_speed: f64,
-    /// Angular speed (rad/s) below which a body is at rest.
+    /// Angular speed (rad/s) below which a body is at rest whatever its
+    /// size (it spins slowly enough below either bound).
     #[serde(default = "default_sleep_angular")]
     pub angular_speed: f64,
 }
@@ -285,7 +289,7 @@ fn default_sleep_after() -> f64 {
     0.5
 }
 fn default_sleep_linear() -> f64 {
-    0.01
+    0.05
 }
 fn default_sleep_angular() -> f64 {
     0.05
