@@ -22,7 +22,17 @@ pub struct BodyJac {
 impl BodyJac {
     #[inline]
     fn velocity(&self, nu: &[f64]) -> f64 {
-        let v = &nu[6 * self.body..6 * self.body + 6];
+        self.velocity_of(&nu[6 * self.body..6 * self.body + 6])
+    }
+
+    #[inline]
+    fn add_to(&self, impulse: f64, nu: &mut [f64]) {
+        self.add_impulse(impulse, &mut nu[6 * self.body..6 * self.body + 6]);
+    }
+
+    /// `lin . v + ang . w` with `v` this body's six velocities.
+    #[inline]
+    pub fn velocity_of(&self, v: &[f64]) -> f64 {
         self.lin.x * v[0]
             + self.lin.y * v[1]
             + self.lin.z * v[2]
@@ -31,9 +41,9 @@ impl BodyJac {
             + self.ang.z * v[5]
     }
 
+    /// `v += impulse * [lin; ang]` with `v` this body's six velocities.
     #[inline]
-    fn add_to(&self, impulse: f64, nu: &mut [f64]) {
-        let v = &mut nu[6 * self.body..6 * self.body + 6];
+    pub fn add_impulse(&self, impulse: f64, v: &mut [f64]) {
         v[0] += self.lin.x * impulse;
         v[1] += self.lin.y * impulse;
         v[2] += self.lin.z * impulse;

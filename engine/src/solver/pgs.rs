@@ -246,6 +246,85 @@ fn within(recent: &[f64], tolerance: f64) -> bool {
     rho >= 1.0 || c * rho / (1.0 - rho) <= tolerance
 }
 
+/// Where a sweep's updates read and write the bodies' velocities: all of
+/// `nu`, or a contact's two bodies held apart ([`Held`]).
+trait Velocities {
+    /// `G_k^T nu` for row `k`.
+    fn velocity(&self, row: &Row) -> f64;
+    /// `nu += impulse * weighted`, for a [`Row::weighted`] row.
+    fn add(&mut self, weighted: &Row, impulse: f64);
+}
+
+impl Velocities for [f64] {
+    #[inline]
+    fn velocity(&self, row: &Row) -> f64 {
+        row.velocity(self)
+    }
+    #[inline]
+    fn add(&mut self, weighted: &Row, impulse: f64) {
+        weighted.add_to(impulse, self);
+    }
+}
+
+/// One contact's two bodies' velocities, held while its normal row and its
+/// friction block update: each body is loaded once and stored once per
+/// contact, instead of read by each of its three rows and written by each
+/// of its three updates, and the updates chain through registers instead
+/// of through stores and the loads that wait on them. The same products
+/// and sums in the same order as [`Row::velocity`] and [`Row::add_to`]:
+/// the same bits. Every row it is given acts on its bodies (A, and B or
+/// none: `Pgs::contacts_on_two_bodies`).
+struct Held {
+    a: usize,
+    b: Option<usize>,
+    va: [f64; 6],
+    vb: [f64; 6],
+}
+
+impl Held {
+    #[inline]
+    fn load(row: &Row, nu: &[f64]) -> Held {
+        let a = row.a.map_or(0, |j| j.body);
+        let b = row.b.map(|j| j.body);
+        let mut held = Held {
+            a,
+            b,
+            va: [0.0; 6],
+            vb: [0.0; 6],
+        };
+        held.va.copy_from_slice(&nu[6 * a..6 * a + 6]);
+        if let Some(b) = b {
+            held.vb.copy_from_slice(&nu[6 * b..6 * b + 6]);
+        }
+        held
+    }
+
+    #[inline]
+    fn store(&self, nu: &mut [f64]) {
+        nu[6 * self.a..6 * self.a + 6].copy_from_slice(&self.va);
+        if let Some(b) = self.b {
+            nu[6 * b..6 * b + 6].copy_from_slice(&self.vb);
+        }
+    }
+}
+
+impl Velocities for Held {
+    #[inline]
+    fn velocity(&self, row: &Row) -> f64 {
+        row.a.map_or(0.0, |j| j.velocity_of(&self.va))
+            + row.b.map_or(0.0, |j| j.velocity_of(&self.vb))
+    }
+    #[inline]
+    fn add(&mut self, weighted: &Row, impulse: f64) {
+        if let Some(j) = &weighted.a {
+            j.add_impulse(impulse, &mut self.va);
+        }
+        if let Some(j) = &weighted.b {
+            j.add_impulse(impulse, &mut self.vb);
+        }
+    }
+}
+
 #[derive(Debug, Default, Clone)]
 pub struct Pgs {
     diag: Vec<f64>,
@@ -301,6 +380,10 @@ pub struct Pgs {
     /// many there were in all (see [`Pgs::focus`]).
     focus: Vec<u32>,
     focus_count: usize,
+    /// Every contact's normal row acts on a body A and at most one other
+    /// body B, and its weighted row and its block's rows on the same ones:
+    /// the sweep may then hold their velocities (`Held`).
+    held: bool,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -611,6 +694,7 @@ impl Pgs {
             self.weighted.push(w2);
             self.tangent.push(Tangent { t1, t2, inv, scale });
         }
+        self.held = self.contacts_on_two_bodies(p);
         // The motors' rows, after the blocks in `x` (and so after every
         // island's other coordinates: each island's list stays ascending).
         self.motor_diag.clear();
@@ -619,6 +703,31 @@ impl Pgs {
             self.motor_diag.push(row.dot(&w));
             self.weighted.push(w);
         }
+    }
+
+    /// Whether every contact's rows with a friction block (its normal
+    /// row, that row's weighted row, the block's `t1`, `t2` and their
+    /// weighted rows) act on the same body A and the same other body B or
+    /// none, A and B distinct: the condition of [`Held`].
+    fn contacts_on_two_bodies(&self, p: &PgsProblem) -> bool {
+        let bodies = |r: &Row| (r.a.map(|j| j.body), r.b.map(|j| j.body));
+        p.friction_of.iter().enumerate().all(|(f, &i)| {
+            let k = p.nb + i;
+            let at = p.nb + p.nc + 2 * f;
+            let tg = &self.tangent[f];
+            let ab = bodies(&p.rows[k]);
+            ab.0.is_some()
+                && ab.0 != ab.1
+                && [
+                    &self.weighted[k],
+                    &tg.t1,
+                    &tg.t2,
+                    &self.weighted[at],
+                    &self.weighted[at + 1],
+                ]
+                .into_iter()
+                .all(|r| bodies(r) == ab)
+        })
     }
 
     /// One Gauss-Seidel sweep of island `g`: its joint rows, then each
@@ -723,10 +832,22 @@ impl Pgs {
         x: &mut [f64],
         nu: &mut [f64],
     ) -> f64 {
-        let change = self.update_row(p, p.nb + i, omega, true, x, nu);
+        let k = p.nb + i;
         match self.block_of[i] {
-            Some(f) => change.max(self.update_block(p, f, i, omega, x, nu)),
-            None => change,
+            // The two bodies' velocities held through the normal row's and
+            // the block's updates (see `Held`).
+            Some(f) if self.held => {
+                let mut held = Held::load(&p.rows[k], nu);
+                let change = self.update_row(p, k, omega, true, x, &mut held);
+                let change = change.max(self.update_block(p, f, i, omega, x, &mut held));
+                held.store(nu);
+                change
+            }
+            Some(f) => {
+                let change = self.update_row(p, k, omega, true, x, nu);
+                change.max(self.update_block(p, f, i, omega, x, nu))
+            }
+            None => self.update_row(p, k, omega, true, x, nu),
         }
     }
 
@@ -760,21 +881,21 @@ impl Pgs {
 
     /// A joint (`unilateral` false) or normal row's update; its velocity
     /// change (m/s).
-    fn update_row(
+    fn update_row<V: Velocities + ?Sized>(
         &self,
         p: &PgsProblem,
         k: usize,
         omega: f64,
         unilateral: bool,
         x: &mut [f64],
-        nu: &mut [f64],
+        nu: &mut V,
     ) -> f64 {
         let d = self.diag[k];
         if d <= 0.0 {
             return 0.0;
         }
         let lam = x[k];
-        let res = p.rows[k].velocity(nu) + p.offset[k] + p.cfm[k] * lam;
+        let res = nu.velocity(&p.rows[k]) + p.offset[k] + p.cfm[k] * lam;
         // The inverse, not a division: the division's latency was on the
         // sweep's chain of dependent updates.
         let mut new = lam - omega * res * self.inv_diag[k];
@@ -786,25 +907,25 @@ impl Pgs {
             return 0.0;
         }
         x[k] = new;
-        self.weighted[k].add_to(delta, nu);
+        nu.add(&self.weighted[k], delta);
         delta.abs() * d
     }
 
     /// Friction block `f` of normal row `i`: a 2-D block step, then the
     /// cone's polygon; its velocity change (m/s).
-    fn update_block(
+    fn update_block<V: Velocities + ?Sized>(
         &self,
         p: &PgsProblem,
         f: usize,
         i: usize,
         omega: f64,
         x: &mut [f64],
-        nu: &mut [f64],
+        nu: &mut V,
     ) -> f64 {
         let at = p.nb + p.nc + 2 * f;
         let tg = &self.tangent[f];
         let pt = [x[at], x[at + 1]];
-        let v = [tg.t1.velocity(nu), tg.t2.velocity(nu)];
+        let v = [nu.velocity(&tg.t1), nu.velocity(&tg.t2)];
         let inv = &tg.inv;
         let target = [
             pt[0] - omega * (inv[0][0] * v[0] + inv[0][1] * v[1]),
@@ -820,8 +941,8 @@ impl Pgs {
         if delta == [0.0, 0.0] {
             return 0.0;
         }
-        self.weighted[at].add_to(delta[0], nu);
-        self.weighted[at + 1].add_to(delta[1], nu);
+        nu.add(&self.weighted[at], delta[0]);
+        nu.add(&self.weighted[at + 1], delta[1]);
         x[at] = new[0];
         x[at + 1] = new[1];
         // Not `hypot`: libm's was 8 % of a pile's sweep time; no overflow here.
