@@ -34,7 +34,7 @@ impl Polygon {
         self.dirs.extend((0..=nd).map(|j| direction(j, nd)));
         self.normals.clear();
         self.normals.extend((0..nd).map(|j| edge_normal(j, nd)));
-        self.cos_half = (std::f64::consts::PI / nd as f64).cos();
+        self.cos_half = cos_half(nd);
     }
 
     /// [`project_polygon`] from the tables.
@@ -61,23 +61,72 @@ impl Polygon {
     }
 }
 
+/// Up to this many directions, [`edge_normal`] and [`cos_half`] are
+/// tabled, as `contact::direction_coefficients` is: the warm start clips
+/// each contact's friction to its polygon in every step
+/// ([`project_polygon`], `pgs::warm_friction`), and computed there they
+/// were two to nine cosines and sines per contact (at 10,000 spheres,
+/// 24,000 contacts a step). The tables hold the same expressions' values,
+/// bit for bit.
+const TABLED: usize = 16;
+
+struct Tables {
+    normals: [[(f64, f64); TABLED]; TABLED + 1],
+    cos_half: [f64; TABLED + 1],
+}
+
+fn tables() -> &'static Tables {
+    static TABLES: std::sync::OnceLock<Tables> = std::sync::OnceLock::new();
+    TABLES.get_or_init(|| {
+        let mut t = Tables {
+            normals: [[(1.0, 0.0); TABLED]; TABLED + 1],
+            cos_half: [1.0; TABLED + 1],
+        };
+        for nd in 1..=TABLED {
+            t.cos_half[nd] = exact_cos_half(nd);
+            for j in 0..nd {
+                t.normals[nd][j] = exact_edge_normal(j, nd);
+            }
+        }
+        t
+    })
+}
+
 /// The outward normal of the polygon's edge `j`, at angle `2 pi j / n_d +
 /// pi / n_d`.
 fn edge_normal(j: usize, nd: usize) -> (f64, f64) {
+    match (1..=TABLED).contains(&nd) && j < nd {
+        true => tables().normals[nd][j],
+        false => exact_edge_normal(j, nd),
+    }
+}
+
+fn exact_edge_normal(j: usize, nd: usize) -> (f64, f64) {
     let half = std::f64::consts::PI / nd as f64;
     let a = std::f64::consts::TAU * j as f64 / nd as f64 + half;
     (a.cos(), a.sin())
 }
 
+/// `cos(pi / n_d)`: the apothem of the polygon of unit radius.
+fn cos_half(nd: usize) -> f64 {
+    match (1..=TABLED).contains(&nd) {
+        true => tables().cos_half[nd],
+        false => exact_cos_half(nd),
+    }
+}
+
+fn exact_cos_half(nd: usize) -> f64 {
+    (std::f64::consts::PI / nd as f64).cos()
+}
+
 /// The point of the polygon with vertices `cap d_j` (the polyhedral cone at
 /// normal impulse `cap / mu`) nearest to `x`, in tangent-plane coordinates.
 pub fn project_polygon(x: [f64; 2], cap: f64, nd: usize) -> [f64; 2] {
-    let cos_half = (std::f64::consts::PI / nd as f64).cos();
     project_with(
         x,
         cap,
         nd,
-        cos_half,
+        cos_half(nd),
         |j| edge_normal(j, nd),
         |j| direction(j, nd),
     )
@@ -221,6 +270,20 @@ pub fn project_disc(x: [f64; 2], cap: f64) -> [f64; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_tabled_edge_normals_are_the_computed_ones_to_the_bit() {
+        for nd in 1..=TABLED + 2 {
+            assert_eq!(cos_half(nd).to_bits(), exact_cos_half(nd).to_bits(), "{nd}");
+            for j in 0..nd + 1 {
+                let (t, e) = (edge_normal(j, nd), exact_edge_normal(j, nd));
+                assert_eq!(
+                    (t.0.to_bits(), t.1.to_bits()),
+                    (e.0.to_bits(), e.1.to_bits())
+                );
+            }
+        }
+    }
 
     #[test]
     fn the_sector_by_cross_products_is_the_sector_by_angle() {
