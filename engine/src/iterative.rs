@@ -34,7 +34,7 @@ use super::mlcp::{Mlcp, Offsets};
 use super::solver::Lemke;
 use super::solver::{pgs, Lcp, Pgs, PgsInfo, PgsParams, PgsProblem};
 use super::split::{self, Split};
-use super::state::{State, WarmContact};
+use super::state::{State, WarmContact, WarmCursor};
 use cosim_shared::FrictionCone;
 
 /// The warm start, the offsets in use and the rigid answer, kept while a
@@ -286,10 +286,6 @@ struct Attempt<'a> {
 }
 
 impl<'a> Attempt<'a> {
-    fn contact(self, id: usize) -> Option<&'a WarmContact> {
-        WarmContact::find(self.contacts, id)
-    }
-
     /// Marks in `dirty` the islands of `m` (grouped as `groups`) that
     /// hold a contact `contacts` does not.
     fn mark(
@@ -324,10 +320,18 @@ fn warm_start(m: &mut Mlcp, state: &State, attempt: Option<Attempt>, step: Step)
     let groups = step.groups;
     // The attempt where row `k`'s island takes it.
     let from = |k: usize| attempt.filter(|a| a.dirty[groups.island_of_row(k)]);
-    let warm = |k: usize, id: usize| {
+    // Each pass below asks for its contacts in ascending id (`WarmCursor`).
+    let warm_in = |(tried, kept): &(WarmCursor, WarmCursor), k: usize, id: usize| {
         from(k)
-            .and_then(|a| a.contact(id))
-            .or_else(|| state.warm(id))
+            .and_then(|_| tried.find(id))
+            .or_else(|| kept.find(id))
+            .copied()
+    };
+    let cursors = || {
+        (
+            WarmCursor::new(attempt.map_or(&[][..], |a| a.contacts)),
+            WarmCursor::new(&state.warm_contacts),
+        )
     };
     for k in 0..m.nb {
         m.lambda[k] = from(k).map_or(state.warm_joint[k], |a| a.joint[k]);
@@ -339,15 +343,17 @@ fn warm_start(m: &mut Mlcp, state: &State, attempt: Option<Attempt>, step: Step)
         let at = m.nb + k;
         m.lambda[motors + k] = from(row).map_or(state.warm_joint[at], |a| a.joint[at]);
     }
+    let normals = cursors();
     for (i, &ci) in m.lcp_contacts.iter().enumerate() {
         if m.held.get(i) != Some(&true) {
             let id = step.contacts[ci].id;
-            m.lambda[m.nb + i] = warm(m.nb + i, id).map_or(0.0, |w| w.normal);
+            m.lambda[m.nb + i] = warm_in(&normals, m.nb + i, id).map_or(0.0, |w| w.normal);
         }
     }
+    let frictions = cursors();
     for (f, &i) in m.friction_of.iter().enumerate() {
         let c = &step.contacts[m.lcp_contacts[i]];
-        let Some(w) = warm(m.nb + i, c.id).map(|w| w.friction) else {
+        let Some(w) = warm_in(&frictions, m.nb + i, c.id).map(|w| w.friction) else {
             continue;
         };
         let base = m.nb + m.nc + f * m.nd;

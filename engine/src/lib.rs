@@ -32,6 +32,8 @@ pub mod sleep;
 pub mod solver;
 pub mod split;
 pub mod state;
+#[cfg(test)]
+mod testing;
 
 pub use applied::{InputError, Inputs};
 pub use fallback::Fallback;

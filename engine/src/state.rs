@@ -62,6 +62,45 @@ impl WarmContact {
     }
 }
 
+/// [`WarmContact::find`] for queries that come in ascending id order, as
+/// a step's contacts do (canonical order): a walk forward from the last
+/// query, i.e. a merge of the two lists, where a binary search per query
+/// cost about fifteen scattered reads of the 10,000 pile's 24,000 entries
+/// (2 % of its step). A query behind the last one, or far ahead, is
+/// searched for: the same answers in any order.
+pub struct WarmCursor<'a> {
+    list: &'a [WarmContact],
+    /// The first entry with an id at least the last query's.
+    at: std::cell::Cell<usize>,
+}
+
+impl<'a> WarmCursor<'a> {
+    /// Entries walked past before a query is searched for instead.
+    const WALK: usize = 8;
+
+    pub fn new(list: &'a [WarmContact]) -> WarmCursor<'a> {
+        WarmCursor {
+            list,
+            at: std::cell::Cell::new(0),
+        }
+    }
+
+    pub fn find(&self, id: usize) -> Option<&'a WarmContact> {
+        let list = self.list;
+        let mut k = self.at.get();
+        let behind = k > 0 && list[k - 1].id >= id;
+        let end = (k + Self::WALK).min(list.len());
+        while k < end && list[k].id < id {
+            k += 1;
+        }
+        if behind || (k == end && k < list.len() && list[k].id < id) {
+            k = list.partition_point(|w| w.id < id);
+        }
+        self.at.set(k);
+        list.get(k).filter(|w| w.id == id)
+    }
+}
+
 impl State {
     /// Bytes the state holds on the heap: what a snapshot or a restore
     /// copies. O(bodies + joints + contacts in the last LCP).
@@ -100,6 +139,44 @@ impl State {
             warm_active: Vec::new(),
             rest: vec![0; model.bodies.len()],
             sleep_tag: vec![super::sleep::AWAKE; model.bodies.len()],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cursor finds what the binary search finds, for queries in
+    /// ascending order with gaps of every size, going back, and past the
+    /// end.
+    #[test]
+    fn the_cursor_finds_what_the_search_finds() {
+        let mut rng = crate::testing::Xorshift::new(0x2545_f491_4f6c_dd1d);
+        let mut next = || rng.next_u64();
+        for _ in 0..200 {
+            let mut id = 0;
+            let list: Vec<WarmContact> = (0..(next() % 60) as usize)
+                .map(|_| {
+                    id += 1 + (next() % 5) as usize;
+                    WarmContact {
+                        id,
+                        normal: id as f64,
+                        friction: Vector3::zeros(),
+                    }
+                })
+                .collect();
+            let cursor = WarmCursor::new(&list);
+            let mut q = 0usize;
+            for _ in 0..100 {
+                q = match next() % 10 {
+                    0 => q.saturating_sub((next() % 40) as usize),
+                    1 => q + (next() % 100) as usize,
+                    _ => q + (next() % 3) as usize,
+                };
+                let want = WarmContact::find(&list, q).map(|w| w.id);
+                assert_eq!(cursor.find(q).map(|w| w.id), want, "query {q}");
+            }
         }
     }
 }

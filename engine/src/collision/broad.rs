@@ -296,13 +296,8 @@ mod tests {
 
     /// A small deterministic generator for the test's points.
     fn points(n: usize, seed: u64) -> Vec<Vector3<f64>> {
-        let mut s = seed | 1;
-        let mut next = || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::testing::Xorshift::new(seed);
+        let mut next = || rng.next_f64();
         (0..n)
             .map(|_| Vector3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 2.0)
             .collect()

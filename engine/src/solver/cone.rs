@@ -288,13 +288,8 @@ mod tests {
     #[test]
     fn the_sector_by_cross_products_is_the_sector_by_angle() {
         // Points all around, and on and a hair beside every sector edge.
-        let mut s = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::testing::Xorshift::new(0x9e37_79b9_7f4a_7c15);
+        let mut next = || rng.next_f64();
         for nd in [1, 2, 3, 4, 5, 6, 8, 12, 16, 17] {
             let dir = |j: usize| direction(j, nd);
             let mut points = Vec::new();
