@@ -224,12 +224,12 @@ fn a_sleeping_island_keeps_its_warm_start() {
     assert!(r.pivots < 50, "{} sweeps on waking", r.pivots);
 }
 
-/// The 100-sphere pile of `bench pile`, 1,000 steps, `auto`, sleeping at
-/// the scene's default thresholds.
-fn sleeping_pile() -> String {
+/// The `n`-sphere pile of `bench pile` (a cube), 1,000 steps, `auto`,
+/// sleeping at the scene's default thresholds.
+fn sleeping_pile(n: usize) -> String {
     use cosim_server::bench::pile;
     pile::text_shaped(
-        100,
+        n,
         pile::Shape::Cube,
         0.01,
         4,
@@ -240,6 +240,30 @@ fn sleeping_pile() -> String {
     )
 }
 
+/// Runs the `n` pile until all of it sleeps (within its 1,000 steps), then
+/// `still` steps more, in which nothing is listed and no bit of the bodies
+/// changes; every sphere asleep in the box, not in the air (at rest
+/// within a tenth of a millimetre of overlap).
+fn falls_asleep_whole_and_stays(n: usize, still: usize) {
+    use cosim_server::bench::pile;
+    let scene = cosim_shared::Scene::parse(&sleeping_pile(n), "<pile>").unwrap();
+    let mut e = Engine::new(Model::from_scene(&scene));
+    let slept = run_until_asleep(&mut e, n);
+    assert!(slept < 1000, "slept at step {slept}");
+    let before: Vec<BodyState> = e.state().bodies.clone();
+    for _ in 0..still {
+        let r = e.step();
+        assert!(r.ok() && r.sleeping == n && r.lcp_size == 0, "{r:?}");
+    }
+    assert_eq!(e.state().bodies, before);
+    let w = pile::half_width(n);
+    assert!(e
+        .state()
+        .bodies
+        .iter()
+        .all(|b| b.x.x.abs() < w && b.x.y.abs() < w && b.x.z > pile::RADIUS - 1e-4));
+}
+
 /// Under PGS's residual rule (the pile's, 1 cm/s) a step's answer leaves
 /// constraint velocities of up to the tolerance, and bodies at rest keep
 /// moving at about that: the at-rest thresholds are raised to twice the
@@ -248,29 +272,10 @@ fn sleeping_pile() -> String {
 /// 0 of 100 asleep after 1,000 steps), and then stays to the bit.
 #[test]
 fn a_pile_under_the_residual_rule_falls_asleep() {
-    use cosim_server::bench::pile;
-    let text = sleeping_pile();
-    let scene = cosim_shared::Scene::parse(&text, "<pile>").unwrap();
-    let mut e = Engine::new(Model::from_scene(&scene));
     // Measured: all 100 asleep at step 519 (478 with the spin held to
     // twice the tolerance at the surface, before Box2D v3's 0.05 m/s: its
     // parts that sleep earlier now settle the rest differently).
-    let slept = run_until_asleep(&mut e, 100);
-    assert!(slept < 1000, "slept at step {slept}");
-    let before: Vec<BodyState> = e.state().bodies.clone();
-    for _ in 0..50 {
-        let r = e.step();
-        assert!(r.ok() && r.sleeping == 100 && r.lcp_size == 0, "{r:?}");
-    }
-    assert_eq!(e.state().bodies, before);
-    // Asleep in the box, not in the air: every sphere at rest within a
-    // tenth of a millimetre of overlap.
-    let w = pile::half_width(100);
-    assert!(e
-        .state()
-        .bodies
-        .iter()
-        .all(|b| b.x.x.abs() < w && b.x.y.abs() < w && b.x.z > pile::RADIUS - 1e-4));
+    falls_asleep_whole_and_stays(100, 50);
 }
 
 /// The 1,000 pile (10 x 10 x 10, `bench pile --n 1000 --sleep`)
@@ -282,35 +287,8 @@ fn a_pile_under_the_residual_rule_falls_asleep() {
 /// 10 of the 1,000 bodies slept after 1,500 steps.
 #[test]
 fn the_thousand_pile_falls_asleep_whole_at_the_default_thresholds() {
-    use cosim_server::bench::pile;
-    let n = 1000;
-    let text = pile::text_shaped(
-        n,
-        pile::Shape::Cube,
-        0.01,
-        4,
-        "auto",
-        1000,
-        1,
-        Some(Default::default()),
-    );
-    let scene = cosim_shared::Scene::parse(&text, "<pile>").unwrap();
-    let mut e = Engine::new(Model::from_scene(&scene));
     // Measured: all asleep at step 302.
-    let slept = run_until_asleep(&mut e, n);
-    assert!(slept < 1000, "slept at step {slept}");
-    let before: Vec<BodyState> = e.state().bodies.clone();
-    for _ in 0..20 {
-        let r = e.step();
-        assert!(r.ok() && r.sleeping == n && r.lcp_size == 0, "{r:?}");
-    }
-    assert_eq!(e.state().bodies, before);
-    let w = pile::half_width(n);
-    assert!(e
-        .state()
-        .bodies
-        .iter()
-        .all(|b| b.x.x.abs() < w && b.x.y.abs() < w && b.x.z > pile::RADIUS - 1e-4));
+    falls_asleep_whole_and_stays(1000, 20);
 }
 
 /// Islands for sleeping are tied by contacts the bodies touch (within the
@@ -367,7 +345,7 @@ fn a_sleeping_pile_reports_the_penetration_of_every_contact() {
     // The pile, and a sphere falling from 1 km above it: awake throughout
     // (it lands after about 14 s; the test ends before 8 s).
     let text =
-        sleeping_pile() + &sphere("faller", 0.05, 1.0, [0.0, 0.0, 1000.0], [0.0; 3], 0.5, 0.0);
+        sleeping_pile(100) + &sphere("faller", 0.05, 1.0, [0.0, 0.0, 1000.0], [0.0; 3], 0.5, 0.0);
     let model = Model::from_scene(&cosim_shared::Scene::parse(&text, "<pile>").unwrap());
     let mut e = Engine::new(model.clone());
     let (mut scratch, mut geoms) = Default::default();
