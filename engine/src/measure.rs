@@ -59,7 +59,7 @@ pub struct Asleep {
     /// Every body's sleep tag and each sleeping body's pose, as measured.
     tags: Vec<u32>,
     poses: Vec<(Vector3<f64>, UnitQuaternion<f64>)>,
-    deepest: f64,
+    depth: f64,
 }
 
 impl Asleep {
@@ -75,10 +75,60 @@ impl Asleep {
     }
 }
 
-/// Deepest penetration over every potential contact (m, >= 0). Only
-/// overlapping contacts can have one: the broad phase lists just those
-/// (every contact without it, as the step does). Those with no awake body
-/// come from `asleep` while it holds.
+impl Asleep {
+    /// The deepest penetration among the contacts with no awake body (m,
+    /// at least 0), measured again only when the sleeping bodies or their
+    /// poses changed (`scratch` then holds their geometry).
+    pub fn deepest(
+        &mut self,
+        model: &Model,
+        state: &State,
+        collision: &mut Scratch,
+        scratch: &mut Vec<Geometry>,
+    ) -> f64 {
+        if !sleep::any_asleep(state) {
+            // The key no state with a sleeping body matches.
+            self.tags.clear();
+            self.depth = 0.0;
+        } else if !self.unchanged(state) {
+            detect(
+                model,
+                state,
+                listing(model),
+                Keep::Asleep,
+                collision,
+                scratch,
+            );
+            self.depth = deepest(scratch);
+            self.tags.clear();
+            self.tags.extend_from_slice(&state.sleep_tag);
+            self.poses.clear();
+            self.poses.extend(Asleep::poses(state));
+        }
+        self.depth
+    }
+}
+
+/// What [`max_penetration`] lists: only overlapping contacts can have a
+/// penetration, and the broad phase lists just those (every contact
+/// without it, as the step does).
+fn listing(model: &Model) -> Listing<'static> {
+    if model.params.broad_phase() {
+        Listing::Overlapping
+    } else {
+        Listing::All
+    }
+}
+
+/// The deepest penetration among `geoms` (m, >= 0): any list that holds
+/// every overlapping contact gives the same figure, to the bit (a
+/// contact's gap is its pair's formula, whatever else is listed).
+pub fn deepest(geoms: &[Geometry]) -> f64 {
+    geoms.iter().fold(0.0f64, |a, g| a.max(-g.gap))
+}
+
+/// Deepest penetration over every potential contact (m, >= 0). Those with
+/// no awake body come from `asleep` while it holds.
 pub fn max_penetration(
     model: &Model,
     state: &State,
@@ -86,28 +136,16 @@ pub fn max_penetration(
     scratch: &mut Vec<Geometry>,
     asleep: &mut Asleep,
 ) -> f64 {
-    let listing = || {
-        if model.params.broad_phase() {
-            Listing::Overlapping
-        } else {
-            Listing::All
-        }
-    };
-    let deepest = |g: &[Geometry]| g.iter().fold(0.0f64, |a, g| a.max(-g.gap));
-    if !sleep::any_asleep(state) {
-        // The key no state with a sleeping body matches.
-        asleep.tags.clear();
-        asleep.deepest = 0.0;
-    } else if !asleep.unchanged(state) {
-        detect(model, state, listing(), Keep::Asleep, collision, scratch);
-        asleep.deepest = deepest(scratch);
-        asleep.tags.clear();
-        asleep.tags.extend_from_slice(&state.sleep_tag);
-        asleep.poses.clear();
-        asleep.poses.extend(Asleep::poses(state));
-    }
-    detect(model, state, listing(), Keep::Awake, collision, scratch);
-    deepest(scratch).max(asleep.deepest)
+    let sleeping = asleep.deepest(model, state, collision, scratch);
+    detect(
+        model,
+        state,
+        listing(model),
+        Keep::Awake,
+        collision,
+        scratch,
+    );
+    deepest(scratch).max(sleeping)
 }
 
 /// Largest rotation error of the hinges, sliders and fixed joints (rad).

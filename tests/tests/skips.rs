@@ -110,3 +110,80 @@ fn the_broad_phase_widens_for_fast_free_and_new_speeds() {
     let last = &on[99].bodies;
     assert!(last[2].v.x > 1.0 && last[2].v.x > last[0].v.x, "{last:?}");
 }
+
+/// The step's measurement lists the next step's geometry, which the next
+/// collision stage takes instead of detecting again
+/// (`Workspace::look_ahead`): the penetration a step reports is the one
+/// measured on its state alone, to the bit; and a restored snapshot or a
+/// wake by an input (in `finish` called alone) drops the listing of the state before: the next steps
+/// are those an engine new to that state takes. Random scenes (boxes,
+/// capsules, joints, corners) with sleeping at thresholds it reaches
+/// within their 20 steps.
+#[test]
+fn the_measurement_s_listing_serves_the_next_step_and_no_other() {
+    use cosim_server::bench::robust;
+    use cosim_server::engine::{measure, sleep, Engine, Model};
+    use nalgebra::Vector3;
+    let sleep_table = "[sim.sleep]\nafter = 0\nlinear_speed = 0.5\nangular_speed = 5\n\n";
+    let (mut restored, mut woken) = (0, 0);
+    for seed in 1..=80 {
+        let text = robust::scene(seed);
+        let at = text.find("\n[[").expect("the scene has bodies") + 1;
+        let text = format!("{}{sleep_table}{}", &text[..at], &text[at..]);
+        let scene = cosim_shared::Scene::parse(&text, "<look-ahead>").unwrap();
+        let model = Model::from_scene(&scene);
+        let mut e = Engine::new(model.clone());
+        let mut states = vec![e.state().clone()];
+        for step in 1..=20 {
+            let r = e.step();
+            let (mut collision, mut scratch, mut asleep) = Default::default();
+            let alone = measure::max_penetration(
+                &model,
+                e.state(),
+                &mut collision,
+                &mut scratch,
+                &mut asleep,
+            );
+            assert_eq!(
+                r.max_penetration.to_bits(),
+                alone.to_bits(),
+                "seed {seed} step {step}: reported {:e}, alone {alone:e}",
+                r.max_penetration
+            );
+            states.push(e.state().clone());
+        }
+        // Back to step 5 after step 20: steps 6 to 10 again, to the bit.
+        e.set_state(states[5].clone());
+        for (k, want) in states.iter().enumerate().take(11).skip(6) {
+            e.step();
+            assert!(e.state() == want, "seed {seed}: step {k} after the restore");
+        }
+        restored += 1;
+        // A push on a sleeping body after a step: the step an engine new
+        // to that state takes with the same push.
+        let Some(i) = (0..model.bodies.len()).find(|&i| sleep::asleep(e.state(), i)) else {
+            continue;
+        };
+        let push = Vector3::new(0.0, 0.0, 1e-3 * model.bodies[i].mass);
+        let mut fresh = Engine::new(model.clone());
+        fresh.set_state(e.state().clone());
+        for engine in [&mut e, &mut fresh] {
+            engine
+                .add_body_impulse(i, push, Vector3::zeros())
+                .expect("a body of the scene");
+        }
+        // `finish` alone: the wake comes before any collision stage (as
+        // `step` has it, whose own collision stage takes the listing first).
+        e.finish();
+        fresh.step();
+        assert!(
+            e.state() == fresh.state(),
+            "seed {seed}: the step after waking body {i}"
+        );
+        woken += 1;
+    }
+    assert!(
+        restored == 80 && woken >= 20,
+        "{restored} restored, {woken} woken"
+    );
+}
