@@ -395,6 +395,16 @@ pub struct Engine {
     early_assembly: f64,
     /// Contacts projected out of deep penetration by this step's prepare.
     projected: usize,
+    /// A body impulse waits for the next step (`add_body_impulse`).
+    impulse_pending: bool,
+    /// Every body was asleep when the last step ended.
+    all_asleep: bool,
+    /// The report of the last step that began and ended with every body
+    /// asleep and had no input, while nothing has changed since: the
+    /// report of every such step until then (see [`Engine::idle_step`]).
+    idle: Option<StepReport>,
+    /// `prepare` ran before this idle step.
+    idle_prepared: bool,
 }
 
 impl Engine {
@@ -414,6 +424,10 @@ impl Engine {
             collision_time: 0.0,
             early_assembly: 0.0,
             projected: 0,
+            impulse_pending: false,
+            all_asleep: false,
+            idle: None,
+            idle_prepared: false,
         }
     }
 
@@ -443,6 +457,8 @@ impl Engine {
         self.state = state;
         self.prepared = false;
         self.ws.ahead_listed = false;
+        self.all_asleep = false;
+        self.idle = None;
         // Its warm starts are not the ones the sleeping part was picked from.
         self.ws.sleeping_tags.clear();
     }
@@ -450,6 +466,7 @@ impl Engine {
     /// Tolerance, iteration cap and relaxation of the iterative solver.
     pub fn set_pgs_params(&mut self, params: PgsParams) {
         self.pgs_params = params;
+        self.idle = None;
     }
 
     pub fn inputs(&self) -> &Inputs {
@@ -480,6 +497,7 @@ impl Engine {
             });
         }
         self.inputs.joint_torque[joint] = torque;
+        self.idle = None;
         Ok(())
     }
 
@@ -504,6 +522,7 @@ impl Engine {
             });
         }
         self.inputs.motor_speed[joint] = speed;
+        self.idle = None;
         Ok(())
     }
 
@@ -531,6 +550,7 @@ impl Engine {
         let imp = &mut self.inputs.body_impulse[body];
         imp.0 += linear;
         imp.1 += angular;
+        self.impulse_pending = true;
         Ok(())
     }
 
@@ -559,8 +579,48 @@ impl Engine {
 
     /// One whole step.
     pub fn step(&mut self) -> StepReport {
+        if let Some(report) = self.idle_step() {
+            return report;
+        }
         self.prepare_contacts();
         self.finish()
+    }
+
+    /// A step of a world asleep whole, with no input: what it changes is
+    /// the clock. A sleeping body keeps its pose and zero velocity to the
+    /// bit, nothing is listed (every contact has no awake body, and no
+    /// body is on a joint: such bodies never sleep), so no impulse, warm
+    /// start or measurement changes; the first such step runs every stage
+    /// and its report is kept (`idle`) as the report of those that follow,
+    /// with their step, time and timings. `None` where the step must run:
+    /// an input (a body impulse wakes its island; torques, motor targets
+    /// and solver parameters drop the kept report), a restored state, or
+    /// `Skips::idle` off.
+    ///
+    /// Why: a sleeping 1,000-sphere pile's step cost about 50 us, in ten
+    /// passes over the bodies that each found every body asleep (reach,
+    /// inverse masses, free velocity, the pose copy, the sleep update, the
+    /// energy, the sleeping poses' comparison); Box2D and Rapier step a
+    /// world asleep in constant time.
+    fn idle_step(&mut self) -> Option<StepReport> {
+        if !self.model.params.skips.idle || self.impulse_pending {
+            return None;
+        }
+        let kept = self.idle.as_ref()?;
+        let lap = Lap::start();
+        self.state.step += 1;
+        self.state.t = self.state.step as f64 * self.model.params.h;
+        let report = StepReport {
+            step: self.state.step,
+            t: self.state.t,
+            early_matrix: std::mem::take(&mut self.idle_prepared),
+            timings: Timings {
+                total: lap.total(),
+                ..Timings::default()
+            },
+            ..*kept
+        };
+        Some(report)
     }
 
     /// The part of the step that needs no input, for a caller that has
@@ -572,6 +632,12 @@ impl Engine {
     /// they select fewer, and builds afresh otherwise: the step's bits are
     /// the same as `step`'s either way. Idempotent until the state changes.
     pub fn prepare(&mut self) {
+        if self.model.params.skips.idle && !self.impulse_pending && self.idle.is_some() {
+            // An idle step prepares nothing (`idle_step`), but says, as
+            // the full one would, that its (empty) matrix was made early.
+            self.idle_prepared = true;
+            return;
+        }
         let Some(mut lap) = self.prepare_contacts() else {
             return;
         };
@@ -643,6 +709,15 @@ impl Engine {
     /// The rest of the step, with the inputs as they are now. On failure the
     /// state is left unchanged and the report says why.
     pub fn finish(&mut self) -> StepReport {
+        if let Some(report) = self.idle_step() {
+            return report;
+        }
+        // The step may be idle (see `idle_step`): it began with every body
+        // asleep and has no input.
+        let began_idle = self.all_asleep && !self.impulse_pending;
+        self.impulse_pending = false;
+        self.idle = None;
+        self.idle_prepared = false;
         if self.wake_on_inputs() {
             self.prepared = false;
             self.ws.ahead_listed = false;
@@ -744,7 +819,12 @@ impl Engine {
             .filter(|r| r.kind == ImpulseKind::Normal)
             .count();
         timings.integrate = lap.lap();
-        self.measure(report, timings, lap)
+        let report = self.measure(report, timings, lap);
+        self.all_asleep = report.sleeping > 0 && report.sleeping == self.model.bodies.len();
+        if began_idle && self.all_asleep {
+            self.idle = Some(report);
+        }
+        report
     }
 
     /// Applied impulses, pruning, mLCP, solver and recovery, repeated while

@@ -386,6 +386,10 @@ pub struct Skips {
     /// The broad phase lists only the sphere pairs within reach
     /// (`collision/broad.rs`) instead of every pair.
     pub broad_phase: bool,
+    /// A step of a world asleep whole, with no input, advances the clock
+    /// alone (`Engine::idle_step`), instead of running every stage on
+    /// nothing.
+    pub idle: bool,
 }
 
 impl Default for Skips {
@@ -395,6 +399,7 @@ impl Default for Skips {
             warm_start: true,
             lemke_guess: true,
             broad_phase: true,
+            idle: true,
         }
     }
 }

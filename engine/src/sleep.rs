@@ -16,7 +16,8 @@
 //! sort (none while at most `collision::broad::FEW_ACTIVE` bodies are
 //! awake), a comparison of its poses with those its penetration was
 //! measured at (`measure::Asleep`), and nothing else, and its state does
-//! not change by a bit.
+//! not change by a bit. A world asleep whole steps idle: the clock alone
+//! (`Engine::idle_step`, `Skips::idle`).
 //!
 //! It wakes, as one island, in the step where
 //!

@@ -403,3 +403,68 @@ fn a_restored_state_carries_its_own_sleeping_warm_starts() {
     assert_eq!(r.lcp_size, 0, "{r:?}");
     assert_eq!(e.state().warm_contacts, s.warm_contacts);
 }
+
+/// A world asleep whole steps idle (`Skips::idle`: the clock alone, the
+/// first such step's report kept for the others) with the full step's
+/// bits: the 100 pile with and without the skip, step by step, its state,
+/// report (but for the timings), impulses, contacts and velocities equal;
+/// through its falling asleep, a push that wakes it and its sleeping
+/// again, a restored snapshot, steps made of `prepare` and `finish`, and
+/// a push between them.
+#[test]
+fn a_world_asleep_whole_steps_idle_with_the_full_steps_bits() {
+    let scene = cosim_shared::Scene::parse(&sleeping_pile(100), "<pile>").unwrap();
+    let model = Model::from_scene(&scene);
+    let mut full = model.clone();
+    full.params.skips.idle = false;
+    let mut engines = [Engine::new(model), Engine::new(full)];
+    let (mut idle, mut saved) = ([0; 2], None);
+    for k in 1..=1600u64 {
+        match k {
+            600 => saved = Some(engines[0].state().clone()),
+            // A push up on sphere 7, at rest since about step 520.
+            900 => {
+                for e in &mut engines {
+                    e.add_body_impulse(7, Vector3::new(0.0, 0.0, 0.05), Vector3::zeros())
+                        .expect("a body of the pile");
+                }
+            }
+            1300 => {
+                for e in &mut engines {
+                    e.set_state(saved.clone().expect("saved at step 600"));
+                }
+            }
+            _ => {}
+        }
+        let mut reports = [0, 1].map(|i| {
+            let e = &mut engines[i];
+            if k == 1500 {
+                // Prepared idle, then pushed: the full step after all.
+                e.prepare();
+                e.add_body_impulse(3, Vector3::new(0.05, 0.0, 0.0), Vector3::zeros())
+                    .expect("a body of the pile");
+                e.finish()
+            } else if k % 3 == 0 {
+                e.prepare();
+                e.finish()
+            } else {
+                e.step()
+            }
+        });
+        for (i, r) in reports.iter_mut().enumerate() {
+            assert!(r.ok(), "step {k}: {r:?}");
+            // No stage ran: an idle step.
+            idle[i] += usize::from(r.timings.measure == 0.0);
+            r.timings = Default::default();
+        }
+        let [a, b] = &engines;
+        assert_eq!(reports[0], reports[1], "step {k}");
+        assert!(a.state() == b.state(), "step {k}: the states differ");
+        assert_eq!(a.impulses(), b.impulses(), "step {k}");
+        assert_eq!(a.solved_velocities(), b.solved_velocities(), "step {k}");
+        assert_eq!(a.contacts().len(), b.contacts().len(), "step {k}");
+    }
+    // Asleep from about step 520 to the push at 900, again after it, and
+    // from the restored step 600's state on.
+    assert!(idle[0] >= 500 && idle[1] == 0, "idle steps: {idle:?}");
+}
