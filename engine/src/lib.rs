@@ -288,9 +288,9 @@ impl Workspace {
     /// step's measurement needs every overlapping contact of the new
     /// poses, and the next step's collision stage lists a superset of
     /// those at the same poses: one detection serves both (measured on the
-    /// 10,000 pile: a detection of its own cost the measurement 2.9 ms a
-    /// step). Only `Engine::set_state` and a wake by an input change the
-    /// state in between: they drop it (`ahead_listed`).
+    /// 10,000 pile: the measurement, mostly its own detection, took 2.9 ms
+    /// of a 58 ms step). Only `Engine::set_state` and a wake by an input
+    /// change the state in between: they drop it (`ahead_listed`).
     fn look_ahead(&mut self, model: &Model, state: &State) -> f64 {
         self.reach_of(model, state);
         list(
