@@ -250,10 +250,10 @@ impl Workspace {
     /// rest then needs no widening); `widen` grows that when the free or
     /// the new velocities reach farther.
     fn contact_set(&mut self, model: &Model, state: &State) {
-        self.reach_of(model, state);
         if std::mem::take(&mut self.ahead_listed) {
             // `look_ahead` listed this very state's geometry (same reach,
-            // same listing, same sleep): taken, not detected again.
+            // kept in `reach` since; same listing, same sleep): taken,
+            // not detected again.
             std::mem::swap(&mut self.geoms, &mut self.ahead);
             // The two grow together: swapped every step, the smaller one
             // would be the step's every other step, and a widening then
@@ -264,6 +264,7 @@ impl Workspace {
             self.ahead.reserve(cap);
             self.build(model, state);
         } else {
+            self.reach_of(model, state);
             self.detect(model, state);
         }
         // Zero for a sleeping body: static for the step.
@@ -586,6 +587,11 @@ impl Engine {
         self.finish()
     }
 
+    /// Whether the next step is idle (see [`Engine::idle_step`]).
+    fn idles(&self) -> bool {
+        self.model.params.skips.idle && !self.impulse_pending && self.idle.is_some()
+    }
+
     /// A step of a world asleep whole, with no input: what it changes is
     /// the clock. A sleeping body keeps its pose and zero velocity to the
     /// bit, nothing is listed (every contact has no awake body, and no
@@ -603,7 +609,7 @@ impl Engine {
     /// energy, the sleeping poses' comparison); Box2D and Rapier step a
     /// world asleep in constant time.
     fn idle_step(&mut self) -> Option<StepReport> {
-        if !self.model.params.skips.idle || self.impulse_pending {
+        if !self.idles() {
             return None;
         }
         let kept = self.idle.as_ref()?;
@@ -632,7 +638,7 @@ impl Engine {
     /// they select fewer, and builds afresh otherwise: the step's bits are
     /// the same as `step`'s either way. Idempotent until the state changes.
     pub fn prepare(&mut self) {
-        if self.model.params.skips.idle && !self.impulse_pending && self.idle.is_some() {
+        if self.idles() {
             // An idle step prepares nothing (`idle_step`), but says, as
             // the full one would, that its (empty) matrix was made early.
             self.idle_prepared = true;
