@@ -73,9 +73,7 @@ impl Asleep {
     fn unchanged(&self, state: &State) -> bool {
         self.tags == state.sleep_tag && self.poses.iter().copied().eq(Asleep::poses(state))
     }
-}
 
-impl Asleep {
     /// The deepest penetration among the contacts with no awake body (m,
     /// at least 0), measured again only when the sleeping bodies or their
     /// poses changed (`scratch` then holds their geometry).
