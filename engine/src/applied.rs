@@ -94,44 +94,52 @@ pub struct InvMass {
 
 /// World-frame inverse masses of all bodies, for this step's orientations.
 /// A sleeping body's are zero: it is static for the step, and a late
-/// contact with an awake body (`sleep.rs`) cannot move it.
-pub fn inverse_masses(model: &Model, state: &State, out: &mut Vec<InvMass>) {
-    out.clear();
-    for (i, (b, s)) in model.bodies.iter().zip(&state.bodies).enumerate() {
-        if crate::sleep::asleep(state, i) {
-            out.push(InvMass {
-                inv_m: 0.0,
-                inv_i: Matrix3::zeros(),
-            });
-            continue;
-        }
-        let r = s.q.to_rotation_matrix();
-        out.push(InvMass {
+/// contact with an awake body (`sleep.rs`) cannot move it. With `only`
+/// (the awake bodies, where the sleeping ones' entries are zero already:
+/// `sleep::Written`), those alone are written.
+pub fn inverse_masses(model: &Model, state: &State, only: Option<&[u32]>, out: &mut Vec<InvMass>) {
+    let of = |i: usize| {
+        let r = state.bodies[i].q.to_rotation_matrix();
+        let b = &model.bodies[i];
+        InvMass {
             inv_m: b.inv_mass,
             inv_i: r.matrix() * b.inv_inertia * r.matrix().transpose(),
-        });
+        }
+    };
+    if let Some(awake) = only {
+        debug_assert_eq!(out.len(), model.bodies.len());
+        for &i in awake {
+            out[i as usize] = of(i as usize);
+        }
+        return;
     }
+    out.clear();
+    out.extend(
+        (0..model.bodies.len()).map(|i| match crate::sleep::asleep(state, i) {
+            true => InvMass {
+                inv_m: 0.0,
+                inv_i: Matrix3::zeros(),
+            },
+            false => of(i),
+        }),
+    );
 }
 
 /// `nu_free = nu + M^-1 p_app`, laid out `[v_0, w_0, v_1, w_1, ...]`;
-/// zero for a sleeping body.
+/// zero for a sleeping body. With `only` (the awake bodies, where the
+/// sleeping ones' entries are zero already: `sleep::Written`), those alone
+/// are written.
 pub fn free_velocity(
     model: &Model,
     state: &State,
     inputs: &Inputs,
     minv: &[InvMass],
+    only: Option<&[u32]>,
     nu_free: &mut Vec<f64>,
 ) {
     let h = model.params.h;
-    nu_free.clear();
-    nu_free.resize(6 * model.bodies.len(), 0.0);
-    for (i, (b, s)) in model.bodies.iter().zip(&state.bodies).enumerate() {
-        // A sleeping body's stays zero: it is static for the step (and
-        // not on a joint, whose efforts are added below; with its zero
-        // inverse mass they would add zero).
-        if crate::sleep::asleep(state, i) {
-            continue;
-        }
+    let write = |i: usize, nu_free: &mut [f64]| {
+        let (b, s) = (&model.bodies[i], &state.bodies[i]);
         let (imp_lin, imp_ang) = inputs.body_impulse[i];
         let p_lin = h * (model.params.gravity * b.mass + b.force) + imp_lin;
         // Gyroscopic term w x J w with the world-frame inertia (zero for a
@@ -143,6 +151,28 @@ pub fn free_velocity(
         let w = s.w + minv[i].inv_i * p_ang;
         nu_free[6 * i..6 * i + 3].copy_from_slice(v.as_slice());
         nu_free[6 * i + 3..6 * i + 6].copy_from_slice(w.as_slice());
+    };
+    // Every body on a joint is awake: its entries, to which the efforts
+    // below add, are written first either way.
+    match only {
+        Some(awake) => {
+            debug_assert_eq!(nu_free.len(), 6 * model.bodies.len());
+            for &i in awake {
+                write(i as usize, nu_free);
+            }
+        }
+        None => {
+            nu_free.clear();
+            nu_free.resize(6 * model.bodies.len(), 0.0);
+            // A sleeping body's stays zero: it is static for the step (and
+            // not on a joint, whose efforts are added below; with its zero
+            // inverse mass they would add zero).
+            for i in 0..model.bodies.len() {
+                if !crate::sleep::asleep(state, i) {
+                    write(i, nu_free);
+                }
+            }
+        }
     }
     for (joint, effort) in model.joints.iter().zip(&inputs.joint_torque) {
         let p = effort * h;

@@ -105,6 +105,9 @@ pub struct Step<'a> {
     pub contacts: &'a [Contact],
     pub params: &'a Params,
     pub minv: &'a [InvMass],
+    /// The awake bodies (`sleep::Awake`): a sleeping body's free velocity
+    /// is zero.
+    pub awake: &'a [u32],
     /// The rows by island: each is solved on its own.
     pub groups: &'a Groups,
 }
@@ -130,7 +133,13 @@ pub struct Solved {
 /// may gain [`BUDGET_FACTOR`] times the stabilisation budget (a resting or
 /// sliding contact, a bounce).
 pub fn allowance(m: &Mlcp, gain: f64, step: Step) -> f64 {
-    let free: f64 = 0.5 * step.nu_free.iter().map(|v| v * v).sum::<f64>();
+    // Over the awake bodies' entries, in body order: the sleeping ones
+    // add exact zeros, so the sum has the bits of the sum over all.
+    let free: f64 = 0.5
+        * (step.awake.iter())
+            .flat_map(|&i| &step.nu_free[6 * i as usize..6 * i as usize + 6])
+            .map(|v| v * v)
+            .sum::<f64>();
     let round_off = ENERGY_ABSOLUTE + ENERGY_RELATIVE * free;
     if gain <= round_off {
         round_off

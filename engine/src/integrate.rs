@@ -26,7 +26,8 @@ use nalgebra::{UnitQuaternion, Vector3};
 /// A body's pose after the step: position and orientation.
 pub type Pose = (Vector3<f64>, UnitQuaternion<f64>);
 
-/// Advances every body with the new velocities `nu` (`[v_i, w_i]` per body).
+/// Advances the `awake` bodies (ascending; a sleeping body keeps its pose
+/// and zero velocity) with the new velocities `nu` (`[v_i, w_i]` per body).
 /// The new poses are computed into `poses` first and written only when every
 /// one is finite: finite but huge velocities (an input of 1e308 N m, a scene
 /// spun at 1e308 rad/s) overflow here, and the step must then fail with the
@@ -38,15 +39,13 @@ pub fn positions(
     h: f64,
     mode: PositionUpdate,
     impulsive: &[bool],
+    awake: &[u32],
     poses: &mut Vec<Pose>,
 ) -> Result<(), usize> {
     poses.clear();
-    for (i, b) in state.bodies.iter().enumerate() {
-        if super::sleep::asleep(state, i) {
-            // Asleep: the pose stays, to the bit (sleep.rs).
-            poses.push((b.x, b.q));
-            continue;
-        }
+    for &i in awake {
+        let i = i as usize;
+        let b = &state.bodies[i];
         let k = 6 * i;
         let v = Vector3::new(nu[k], nu[k + 1], nu[k + 2]);
         let w = Vector3::new(nu[k + 3], nu[k + 4], nu[k + 5]);
@@ -64,10 +63,8 @@ pub fn positions(
         }
         poses.push((x, q));
     }
-    for (i, &(x, q)) in poses.iter().enumerate() {
-        if super::sleep::asleep(state, i) {
-            continue;
-        }
+    for (&i, &(x, q)) in awake.iter().zip(poses.iter()) {
+        let i = i as usize;
         let b = &mut state.bodies[i];
         let k = 6 * i;
         b.v = Vector3::new(nu[k], nu[k + 1], nu[k + 2]);

@@ -194,6 +194,13 @@ struct Workspace {
     collision: collision::Scratch,
     reach: Vec<f64>,
     kept: Vec<(usize, bool)>,
+    /// The awake bodies, and the listings at which `reach`, `minv` and
+    /// `nu_free` were last written for every body (a sleeping body's entry
+    /// is a constant, a zero and zeros: kept while no body sleeps or wakes).
+    awake: sleep::Awake,
+    reach_written: sleep::Written,
+    minv_written: sleep::Written,
+    nu_free_written: sleep::Written,
     /// The warm starts of sleeping islands' contacts, kept while they are
     /// not listed (`record_impulses`), and the sleep tags they were picked
     /// under (empty: to pick again, as after `Engine::set_state`).
@@ -268,19 +275,30 @@ impl Workspace {
             self.detect(model, state);
         }
         // Zero for a sleeping body: static for the step.
-        applied::inverse_masses(model, state, &mut self.minv);
+        let listing = self.awake.refresh(state);
+        let only = (!self.minv_written.every_body(listing)).then(|| self.awake.bodies());
+        applied::inverse_masses(model, state, only, &mut self.minv);
     }
 
     /// Each body's reach over the step from `state` (see `contact_set`).
+    /// A sleeping body's is that of a body at rest, the same at every
+    /// step: written again only when a body slept or woke.
     fn reach_of(&mut self, model: &Model, state: &State) {
         let p = &model.params;
-        self.reach.clear();
         let g = p.gravity.norm();
-        self.reach.extend(
-            state.bodies.iter().zip(&model.bodies).map(|(b, m)| {
-                p.h * (b.v.norm() + b.w.norm() * m.shape.spin_reach() + 2.0 * p.h * g)
-            }),
-        );
+        let of = |i: usize| {
+            let (b, m) = (&state.bodies[i], &model.bodies[i]);
+            p.h * (b.v.norm() + b.w.norm() * m.shape.spin_reach() + 2.0 * p.h * g)
+        };
+        let listing = self.awake.refresh(state);
+        if self.reach_written.every_body(listing) {
+            self.reach.clear();
+            self.reach.extend((0..state.bodies.len()).map(of));
+        } else {
+            for &i in self.awake.bodies() {
+                self.reach[i as usize] = of(i as usize);
+            }
+        }
     }
 
     /// The geometry the next `contact_set` lists for `state`, into
@@ -333,11 +351,10 @@ impl Workspace {
             return false;
         }
         let mut grown = false;
-        for (i, r) in self.reach.iter_mut().enumerate() {
-            // A sleeping body does not move: its speed is zero.
-            if sleep::asleep(state, i) {
-                continue;
-            }
+        // A sleeping body does not move: its speed is zero.
+        self.awake.refresh(state);
+        for &i in self.awake.bodies() {
+            let (i, r) = (i as usize, &mut self.reach[i as usize]);
             let speed = match speeds {
                 Speeds::Free => prune::surface_speed(model, i, Some(state), &self.nu_free),
                 Speeds::New => prune::surface_speed(model, i, None, &self.nu),
@@ -372,7 +389,9 @@ impl Workspace {
     /// step's own.
     fn select(&mut self, model: &Model, state: &State, inputs: &Inputs) {
         // Zero for a sleeping body: static for the step.
-        applied::free_velocity(model, state, inputs, &self.minv, &mut self.nu_free);
+        let listing = self.awake.refresh(state);
+        let only = (!self.nu_free_written.every_body(listing)).then(|| self.awake.bodies());
+        applied::free_velocity(model, state, inputs, &self.minv, only, &mut self.nu_free);
         if self.widen(model, state, Speeds::Free) {
             // The contact indices changed: a matrix made for the old list
             // would be taken for the new one.
@@ -462,6 +481,9 @@ impl Engine {
         self.idle = None;
         // Its warm starts are not the ones the sleeping part was picked from.
         self.ws.sleeping_tags.clear();
+        // Nor need its sleeping bodies be at rest where the kept entries
+        // (`Workspace::awake`) were written.
+        self.ws.awake.forget();
     }
 
     /// Tolerance, iteration cap and relaxation of the iterative solver.
@@ -720,11 +742,11 @@ impl Engine {
         }
         // The step may be idle (see `idle_step`): it began with every body
         // asleep and has no input.
-        let began_idle = self.all_asleep && !self.impulse_pending;
-        self.impulse_pending = false;
+        let pending = std::mem::take(&mut self.impulse_pending);
+        let began_idle = self.all_asleep && !pending;
         self.idle = None;
         self.idle_prepared = false;
-        if self.wake_on_inputs() {
+        if pending && self.wake_on_inputs() {
             self.prepared = false;
             self.ws.ahead_listed = false;
         }
@@ -777,17 +799,21 @@ impl Engine {
             self.mark_impulsive();
             let p = &self.model.params;
             let ws = &mut self.ws;
+            ws.awake.refresh(&self.state);
             solved = integrate::positions(
                 &mut self.state,
                 &ws.nu,
                 p.h,
                 p.position_update,
                 &ws.impulsive,
+                ws.awake.bodies(),
                 &mut ws.poses,
             )
             .map_err(|body| StepError::NonFinitePose { body });
         }
-        self.inputs.clear_impulses();
+        if pending {
+            self.inputs.clear_impulses();
+        }
         if let Err(e) = solved {
             report.error = Some(e);
             self.ws.impulses.clear();
@@ -814,6 +840,7 @@ impl Engine {
                 &self.pgs_params,
                 &mut self.state,
                 &self.ws.contacts,
+                &mut self.ws.awake,
                 &mut self.ws.islands,
             );
         }
@@ -893,6 +920,7 @@ impl Engine {
                     contacts: &ws.contacts,
                     params: p,
                     minv: &ws.minv,
+                    awake: ws.awake.bodies(),
                     groups: &ws.groups,
                 };
                 let n = m.lcp_size();
@@ -1004,7 +1032,15 @@ impl Engine {
                 }
             }
             timings.solve += lap.lap();
-            if !ws.nu.iter().all(|x| x.is_finite()) {
+            // A sleeping body's velocities are its free velocity, zero,
+            // plus its zero inverse mass times impulses that are finite
+            // where the awake bodies' velocities are.
+            let finite = |&i: &u32| {
+                ws.nu[6 * i as usize..6 * i as usize + 6]
+                    .iter()
+                    .all(|x| x.is_finite())
+            };
+            if !ws.awake.bodies().iter().all(finite) {
                 return Err(StepError::NonFinite);
             }
             // Pairs the new velocities could bring into reach are listed
@@ -1058,7 +1094,9 @@ impl Engine {
     }
 
     /// Wakes the sleeping islands that this step's body impulses push;
-    /// true when one woke (its contacts must then be listed).
+    /// true when one woke (its contacts must then be listed). Only called
+    /// with an impulse pending (`impulse_pending`): the pass over every
+    /// body's impulse, and the one that clears them, are for such steps.
     fn wake_on_inputs(&mut self) -> bool {
         if !sleep::any_asleep(&self.state) {
             return false;
@@ -1250,9 +1288,14 @@ impl Engine {
         let _span = tracing::trace_span!("measure").entered();
         report.energy = measure::energy(&self.model, &self.state);
         let (model, state, ws) = (&self.model, &self.state, &mut self.ws);
-        let asleep = ws
-            .asleep
-            .deepest(model, state, &mut ws.collision, &mut ws.measure);
+        let listing = ws.awake.refresh(state);
+        let asleep = (ws.asleep).deepest(
+            model,
+            state,
+            Some(listing),
+            &mut ws.collision,
+            &mut ws.measure,
+        );
         report.max_penetration = ws.look_ahead(model, state).max(asleep);
         report.max_joint_error = measure::max_joint_error(&self.model, &self.state);
         report.max_joint_angle_error = measure::max_joint_angle_error(&self.model, &self.state);

@@ -200,7 +200,13 @@ pub fn deep_penetration(
             row.apply(z, &ws.minv, &mut ws.dx);
         }
     }
-    for (i, b) in state.bodies.iter_mut().enumerate() {
+    for i in 0..state.bodies.len() {
+        // A sleeping body is static for the step (zero inverse mass, so a
+        // zero move), to the bit: its orientation is not normalised again.
+        if super::sleep::asleep(state, i) {
+            continue;
+        }
+        let b = &mut state.bodies[i];
         let d = &ws.dx[6 * i..6 * i + 6];
         b.x += Vector3::new(d[0], d[1], d[2]);
         let q = UnitQuaternion::from_scaled_axis(Vector3::new(d[3], d[4], d[5])) * b.q;

@@ -12,12 +12,18 @@
 //! While asleep its bodies are static for the step (no gravity, zero
 //! inverse mass, no position update), and the contacts among them and
 //! with the planes are not listed (left out before their narrow phase,
-//! `collision::Keep`): the island costs its keys in the broad phase's
-//! sort (none while at most `collision::broad::FEW_ACTIVE` bodies are
-//! awake), a comparison of its poses with those its penetration was
-//! measured at (`measure::Asleep`), and nothing else, and its state does
-//! not change by a bit. A world asleep whole steps idle: the clock alone
-//! (`Engine::idle_step`, `Skips::idle`).
+//! `collision::Keep`), and its state does not change by a bit. The passes
+//! over bodies that a sleeping body has no part in (reach, inverse masses,
+//! free velocity, position update, rest counts) walk the awake bodies
+//! ([`Awake`]), and what they keep for the sleeping ones, like the
+//! penetration of their contacts (`measure::Asleep`), is written again
+//! only when a body sleeps or wakes or a state is restored. What the
+//! island still costs is a few reads per body and step: its sleep tags,
+//! its potential energy, its keys in the broad phase's sort (a test per
+//! body and awake body while at most `collision::broad::FEW_ACTIVE` are
+//! awake), its bodies in the union-find of the islands, and its contacts'
+//! warm starts merged into the state's. A world asleep whole steps idle:
+//! the clock alone (`Engine::idle_step`, `Skips::idle`).
 //!
 //! It wakes, as one island, in the step where
 //!
@@ -64,6 +70,72 @@ pub const AWAKE: u32 = u32::MAX;
 /// Whether body `i` is asleep.
 pub fn asleep(state: &State, i: usize) -> bool {
     state.sleep_tag.get(i).is_some_and(|&t| t != AWAKE)
+}
+
+/// The awake bodies in ascending order, listed again only when the sleep
+/// tags change, so that the passes a sleeping body has no part in walk
+/// them instead of every body (a robot beside a sleeping pile, whose
+/// bodies on joints never sleep, paid for each pile body in each of them).
+///
+/// A pass that keeps what it wrote for the sleeping bodies from one step
+/// to the next (a zero, a constant) writes every body again when
+/// [`Awake::listing`] moved: see [`Written`].
+#[derive(Debug, Clone, Default)]
+pub struct Awake {
+    /// The tags the list was made from, while `listed` (not before the
+    /// first listing, nor after [`Awake::forget`]).
+    tags: Vec<u32>,
+    listed: bool,
+    list: Vec<u32>,
+    listing: u64,
+}
+
+impl Awake {
+    /// Lists the awake bodies of `state` again if its tags are not those
+    /// listed (a comparison of the tags: a few microseconds at 10,000
+    /// bodies); the listing's number.
+    pub fn refresh(&mut self, state: &State) -> u64 {
+        if !self.listed || self.tags != state.sleep_tag {
+            self.tags.clone_from(&state.sleep_tag);
+            self.listed = true;
+            self.list.clear();
+            self.list.extend(
+                (self.tags.iter().enumerate())
+                    .filter(|&(_, &t)| t == AWAKE)
+                    .map(|(i, _)| i as u32),
+            );
+            self.listing += 1;
+        }
+        self.listing
+    }
+
+    /// The awake bodies as of the last [`Awake::refresh`].
+    pub fn bodies(&self) -> &[u32] {
+        &self.list
+    }
+
+    /// The next refresh lists again, and moves the listing, whatever the
+    /// tags: a restored state may have the same tags and other poses or
+    /// velocities for its sleeping bodies.
+    pub fn forget(&mut self) {
+        self.listed = false;
+    }
+}
+
+/// Which listing of [`Awake`] a pass last wrote every body at: while it
+/// stands, the sleeping bodies' entries are as written then and the pass
+/// may write the awake ones alone.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Written(Option<u64>);
+
+impl Written {
+    /// Whether the pass must write every body at `listing` (and from now
+    /// on need not, while the listing stands).
+    pub fn every_body(&mut self, listing: u64) -> bool {
+        let every = self.0 != Some(listing);
+        self.0 = Some(listing);
+        every
+    }
 }
 
 /// Whether any body is asleep (the step's filters are skipped otherwise).
@@ -164,13 +236,15 @@ pub fn wake_touched(state: &mut State, contacts: &[Contact], at: Reach) -> bool 
 /// islands whose bodies have all been at rest long enough to sleep.
 /// `contacts` is the step's contact set, `islands` scratch space, `pgs`
 /// the iterative solver's parameters (its resolution). Sleeping bodies
-/// that an awake body touched this step wake first.
+/// that an awake body touched this step wake first. `awake` lists the
+/// bodies the counts and the verdict visit (a sleeping body has neither).
 pub fn update(
     model: &Model,
     params: &Sleep,
     pgs: &PgsParams,
     state: &mut State,
     contacts: &[Contact],
+    awake: &mut Awake,
     islands: &mut Islands,
 ) {
     let n = state.bodies.len();
@@ -179,6 +253,7 @@ pub fn update(
     // began) wake the next step.
     let at = Reach::of(model, pgs);
     wake_touched(state, contacts, at);
+    awake.refresh(state);
     // At rest to the solver's resolution: where a step's answer may leave
     // constraint velocities of up to a tolerance (PGS's residual rule),
     // bodies at rest move at up to about that, step after step, and a
@@ -199,10 +274,8 @@ pub fn update(
     // bodies asleep); at Box2D v3's 0.05 m/s (1 rad/s) it sleeps whole.
     let floor = 2.0 * resolution(&model.params, pgs);
     let linear = params.linear.max(floor);
-    for i in 0..n {
-        if asleep(state, i) {
-            continue;
-        }
+    for &i in awake.bodies() {
+        let i = i as usize;
         let b = &state.bodies[i];
         let reach = model.bodies[i].shape.bounding_radius();
         let angular = match reach > 0.0 {
@@ -216,13 +289,11 @@ pub fn update(
             0
         };
     }
-    for (rest, _) in state
-        .rest
-        .iter_mut()
-        .zip(&model.jointed)
-        .filter(|(_, &j)| j)
-    {
-        *rest = 0;
+    // Bodies on joints are awake, and stay so.
+    for &i in awake.bodies() {
+        if model.jointed[i as usize] {
+            state.rest[i as usize] = 0;
+        }
     }
     // Steps at rest an island needs: `after` seconds, at least one step.
     let need = ((params.after / h).ceil() as u32).max(1);
@@ -247,10 +318,8 @@ pub fn update(
     );
     // The least rest of each island, kept at its root; then the verdict.
     islands.least_rest(&state.rest, &state.sleep_tag, AWAKE);
-    for i in 0..n {
-        if asleep(state, i) {
-            continue;
-        }
+    for &i in awake.bodies() {
+        let i = i as usize;
         let (root, least) = islands.least_of(i);
         if least >= need {
             state.sleep_tag[i] = root as u32;

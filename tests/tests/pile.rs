@@ -17,7 +17,27 @@ fn settings(tolerance: f64) -> Settings {
         trace: 0,
         sleep: None,
         shape: Shape::Cube,
+        pendulum: false,
     }
+}
+
+#[test]
+fn a_pile_falls_asleep_whole_beside_a_pendulum_that_never_does() {
+    // `bench pile --pendulum`: the swinging body, on a joint, stays awake;
+    // the pile beside it sleeps as it does alone.
+    let o = pile::run(
+        100,
+        &Settings {
+            steps: 800,
+            sleep: pile::sleep_speeds("0.1,2").ok(),
+            shape: Shape::Layers(10),
+            pendulum: true,
+            ..settings(1e-2)
+        },
+    );
+    assert_eq!((o.failed, o.escaped, o.asleep), (0, 0, 100), "{o:?}");
+    // The pendulum's bob still swings (0.5 m/s at the bottom).
+    assert!(o.max_speed > 0.1, "{o:?}");
 }
 
 #[test]

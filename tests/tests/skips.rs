@@ -124,14 +124,9 @@ fn the_measurement_s_listing_serves_the_next_step_and_no_other() {
     use cosim_server::bench::robust;
     use cosim_server::engine::{measure, sleep, Engine, Model};
     use nalgebra::Vector3;
-    let sleep_table = "[sim.sleep]\nafter = 0\nlinear_speed = 0.5\nangular_speed = 5\n\n";
     let (mut restored, mut woken) = (0, 0);
     for seed in 1..=80 {
-        let text = robust::scene(seed);
-        let at = text.find("\n[[").expect("the scene has bodies") + 1;
-        let text = format!("{}{sleep_table}{}", &text[..at], &text[at..]);
-        let scene = cosim_shared::Scene::parse(&text, "<look-ahead>").unwrap();
-        let model = Model::from_scene(&scene);
+        let model = Model::from_scene(&robust::sleeping_scene(seed));
         let mut e = Engine::new(model.clone());
         let mut states = vec![e.state().clone()];
         for step in 1..=20 {

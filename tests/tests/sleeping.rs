@@ -468,3 +468,88 @@ fn a_world_asleep_whole_steps_idle_with_the_full_steps_bits() {
     // from the restored step 600's state on.
     assert!(idle[0] >= 500 && idle[1] == 0, "idle steps: {idle:?}");
 }
+
+/// The passes a sleeping body has no part in walk the awake bodies alone,
+/// and what they keep for the sleeping ones from step to step (their
+/// reach, zero inverse masses and free velocities, the penetration of
+/// their contacts: `sleep::Awake`, `sleep::Written`) is what a full pass
+/// writes: an engine stepped straight on takes the steps of an engine new
+/// to its state at each step (which writes every body), state and report
+/// to the bit, through sleeping, pushes that wake an
+/// island, a restore to an earlier state, and one that moves a sleeping
+/// body and keeps the tags. Random scenes (boxes,
+/// capsules, joints, whose bodies never sleep) with sleeping at
+/// thresholds they reach within a few steps: most steps have bodies
+/// asleep beside awake ones.
+#[test]
+fn what_the_awake_passes_keep_for_sleeping_bodies_is_what_a_full_pass_writes() {
+    use cosim_server::bench::robust;
+    use cosim_server::engine::sleep;
+    let (mut beside, mut moved_asleep) = (0, 0);
+    for seed in 1..=60 {
+        let model = Model::from_scene(&robust::sleeping_scene(seed));
+        let n = model.bodies.len();
+        let mut straight = Engine::new(model.clone());
+        let mut states = vec![straight.state().clone()];
+        for step in 1..=30 {
+            if step == 25 {
+                straight.set_state(states[15].clone());
+            }
+            let mut fresh = Engine::new(model.clone());
+            fresh.set_state(straight.state().clone());
+            if step == 12 || step == 20 {
+                let i = (seed as usize + step) % n;
+                for e in [&mut straight, &mut fresh] {
+                    e.add_body_impulse(i, Vector3::new(0.3, 0.0, 0.5), Vector3::zeros())
+                        .expect("a body of the scene");
+                }
+            }
+            let (a, b) = (straight.step(), fresh.step());
+            assert!(
+                straight.state() == fresh.state(),
+                "seed {seed} step {step}: the states differ"
+            );
+            let bits = |r: &cosim_server::engine::StepReport| {
+                (
+                    r.max_penetration.to_bits(),
+                    r.energy.total.to_bits(),
+                    r.energy.midpoint.to_bits(),
+                    r.sleeping,
+                    r.pivots,
+                    r.active_contacts,
+                    r.error.is_some(),
+                )
+            };
+            assert_eq!(
+                bits(&a),
+                bits(&b),
+                "seed {seed} step {step}: the reports differ"
+            );
+            beside += usize::from(a.sleeping > 0 && a.sleeping < n);
+            states.push(straight.state().clone());
+        }
+        // A state whose sleeping body sits elsewhere, with the same tags:
+        // what was kept for the old poses does not stand.
+        let Some(i) = (0..n).find(|&i| sleep::asleep(straight.state(), i)) else {
+            continue;
+        };
+        let mut moved = straight.state().clone();
+        moved.bodies[i].x.z -= 0.02;
+        straight.set_state(moved.clone());
+        let mut fresh = Engine::new(model.clone());
+        fresh.set_state(moved);
+        let (a, b) = (straight.step(), fresh.step());
+        assert!(straight.state() == fresh.state(), "seed {seed}: moved {i}");
+        assert_eq!(
+            a.max_penetration.to_bits(),
+            b.max_penetration.to_bits(),
+            "seed {seed}: moved {i}"
+        );
+        moved_asleep += 1;
+    }
+    assert!(
+        beside >= 400,
+        "{beside} steps with bodies asleep beside awake ones"
+    );
+    assert!(moved_asleep >= 15, "{moved_asleep} sleeping bodies moved");
+}

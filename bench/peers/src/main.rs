@@ -85,6 +85,7 @@ fn piles(args: &Args) -> ExitCode {
         shape: args
             .pile_layers
             .map_or(Shape::Cube, |l| Shape::Layers(l.max(1))),
+        pendulum: false,
     };
     let mut rows = Vec::new();
     for &n in &args.pile {

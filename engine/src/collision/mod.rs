@@ -291,11 +291,13 @@ pub fn detect(
         if model.weld[i] == crate::model::WELDED_TO_WORLD {
             continue;
         }
+        // Whether a body's plane contacts are kept is the body's alone
+        // (`sleep::unlisted`): asked once, not once per plane.
+        if !kept(i, Counterpart::Plane(0)) {
+            continue;
+        }
         let x = state.bodies[i].x;
         for (p, plane) in model.planes.iter().enumerate() {
-            if !kept(i, Counterpart::Plane(p)) {
-                continue;
-            }
             let w = within(listing.reach(i));
             // The bounding sphere's gap bounds every feature's from below.
             if plane.normal.dot(&x) - plane.offset - bound(i) > w {

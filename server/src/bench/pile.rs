@@ -181,7 +181,16 @@ pub struct Settings {
     /// Islands at rest sleep at these thresholds (`[sim.sleep]`).
     pub sleep: Option<SleepDesc>,
     pub shape: Shape,
+    /// A pendulum swings above the pile ([`PENDULUM`]): a body that never
+    /// sleeps beside a pile that does, as a robot's links beside a heap.
+    pub pendulum: bool,
 }
+
+/// A sphere of the pile's size on a spherical joint 6 m above the floor's
+/// centre, 0.5 m below it and swinging at 0.5 m/s: it never reaches the
+/// pile (the cube of 10,000 is 22 layers, about 2.7 m tall) and, on a
+/// joint, never sleeps.
+pub const PENDULUM: &str = "[[body]]\nname = \"bob\"\nradius = 0.05\nmass = 1.0\nposition = [0.0, 0.0, 5.5]\nvelocity = [0.5, 0.0, 0.0]\nfriction = 0.5\nrestitution = 0.0\n\n[[joint]]\nname = \"pivot\"\ntype = \"spherical\"\nbody_a = \"world\"\nbody_b = \"bob\"\nanchor = [0.0, 0.0, 6.0]\n";
 
 /// One pile run's figures (`bench pile`).
 #[derive(Debug, Clone, Default)]
@@ -228,8 +237,12 @@ pub fn run(n: usize, settings: &Settings) -> Outcome {
         trace,
         sleep,
         shape,
+        pendulum,
     } = *settings;
-    let text = text_shaped(n, shape, dt, 4, solver, steps, seed, sleep);
+    let mut text = text_shaped(n, shape, dt, 4, solver, steps, seed, sleep);
+    if pendulum {
+        text += PENDULUM;
+    }
     let scene =
         Scene::parse(&text, "<pile>").unwrap_or_else(|e| panic!("the pile scene is valid: {e}"));
     let mut e = Engine::new(Model::from_scene(&scene));
@@ -319,9 +332,13 @@ pub fn table(rows: &[Outcome], settings: &Settings) -> String {
         None => "sleeping off".into(),
     };
     let shape = settings.shape;
+    let pendulum = match settings.pendulum {
+        true => ", a pendulum swinging above (not in N; its energy in KE end)",
+        false => "",
+    };
     let mut t = format!(
         "Pile of spheres (r = {RADIUS} m, mu = 0.5; {shape}), h = {dt}, n_d = 4, solver {solver} \
-         (PGS: {stop:?} rule at {tol:e} m/s), {sleep}.\n\n\
+         (PGS: {stop:?} rule at {tol:e} m/s), {sleep}{pendulum}.\n\n\
          | N | steps | failed | at cap | ms/step (median) | s total | work (median / max) | worst overlap (mm) | escaped | KE end (J) | max speed end (m/s) | asleep | state B/body |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
     );

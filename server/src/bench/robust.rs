@@ -93,6 +93,18 @@ fn gap(c: [f64; 3], r: f64, (n, p): &PlaneDesc) -> f64 {
     (c[0] - p[0]) * n[0] + (c[1] - p[1]) * n[1] + (c[2] - p[2]) * n[2] - r
 }
 
+/// [`scene`] with sleeping at thresholds its bodies reach within a few
+/// steps (`after = 0`, 0.5 m/s, 5 rad/s): bodies asleep beside awake
+/// ones (those on joints never sleep), for the tests of sleeping.
+pub fn sleeping_scene(seed: u64) -> cosim_shared::Scene {
+    let text = scene(seed);
+    let at = text.find("\n[[").map_or(text.len(), |k| k + 1);
+    let table = "[sim.sleep]\nafter = 0\nlinear_speed = 0.5\nangular_speed = 5\n\n";
+    let text = format!("{}{table}{}", &text[..at], &text[at..]);
+    cosim_shared::Scene::parse(&text, "<sleeping random scene>")
+        .unwrap_or_else(|e| panic!("seed {seed}: the random scene with sleeping is valid: {e}"))
+}
+
 /// One random scene as TOML text, deterministic in `seed`.
 pub fn scene(seed: u64) -> String {
     let mut rng = Rng::new(seed);

@@ -193,6 +193,11 @@ pub enum BenchWhat {
         /// moved faster than 0.1 m/s over a step.
         #[arg(long, value_parser = crate::bench::pile::sleep_speeds)]
         sleep_speeds: Option<cosim_shared::scene::SleepDesc>,
+        /// A pendulum swings above the pile: a body that never sleeps (it
+        /// is on a joint) beside a pile that does, as a robot beside a
+        /// heap; with sleeping, what the sleeping pile still costs.
+        #[arg(long)]
+        pendulum: bool,
         /// Also write the table to this file.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -492,6 +497,7 @@ pub fn main() -> ExitCode {
                     relaxation,
                     sleep,
                     sleep_speeds,
+                    pendulum,
                     out,
                 },
         } => {
@@ -512,6 +518,7 @@ pub fn main() -> ExitCode {
                 trace,
                 sleep: sleep_speeds.or(sleep.then(Default::default)),
                 shape: layers.map_or(pile::Shape::Cube, |l| pile::Shape::Layers(l as usize)),
+                pendulum,
             };
             let rows: Vec<_> = n.iter().map(|&n| pile::run(n, &settings)).collect();
             let table = format!(
