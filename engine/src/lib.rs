@@ -206,8 +206,12 @@ struct Workspace {
     /// under (empty: to pick again, as after `Engine::set_state`).
     sleeping_warm: Vec<WarmContact>,
     sleeping_tags: Vec<u32>,
-    /// Scratch of `record_impulses`: the warm starts merged.
-    merged_warm: Vec<WarmContact>,
+    /// Scratch of `record_impulses` while some contacts sleep: the listed
+    /// contacts' warm starts, and where the last merge put them among the
+    /// sleeping ones' in the state's list (valid while `merged` holds).
+    listed_warm: Vec<WarmContact>,
+    listed_at: Vec<u32>,
+    merged: bool,
     islands: island::Islands,
     /// The step's rows by island, solved each on its own, and the last
     /// solve's islands (the step report's, once the step succeeded).
@@ -1183,6 +1187,8 @@ impl Engine {
         // looked up every contact's bodies: a fifth of the step of a
         // sleeping pile.)
         if ws.sleeping_tags != self.state.sleep_tag {
+            // Picked again: the state's list is merged afresh below.
+            ws.merged = false;
             ws.sleeping_warm.clear();
             if sleep::any_asleep(&self.state) {
                 let (model, state) = (&self.model, &self.state);
@@ -1194,8 +1200,14 @@ impl Engine {
             }
             ws.sleeping_tags.clone_from(&self.state.sleep_tag);
         }
-        // Filled below in the LCP's contact order, which is ascending id.
-        self.state.warm_contacts.clear();
+        // Filled below in the LCP's contact order, which is ascending id:
+        // the state's list itself when no contact sleeps, else the listed
+        // part, then merged with the sleeping one.
+        let alone = ws.sleeping_warm.is_empty();
+        if alone {
+            self.state.warm_contacts.clear();
+        }
+        ws.listed_warm.clear();
         for (j, joint) in self.model.joints.iter().enumerate() {
             // The anchor's force impulse and, for a joint with rotation
             // rows, their torque impulse.
@@ -1255,27 +1267,50 @@ impl Engine {
                 ws.impulses
                     .push(record(ImpulseKind::Friction, warm.friction));
             }
-            self.state.warm_contacts.push(warm);
-        }
-        if !ws.sleeping_warm.is_empty() {
-            // Both ascending, with distinct ids (a listed contact has an
-            // awake body): merged.
-            let (listed, asleep) = (&self.state.warm_contacts, &ws.sleeping_warm);
-            let merged = &mut ws.merged_warm;
-            merged.clear();
-            let (mut i, mut j) = (0, 0);
-            while i < listed.len() && j < asleep.len() {
-                if listed[i].id < asleep[j].id {
-                    merged.push(listed[i]);
-                    i += 1;
-                } else {
-                    merged.push(asleep[j]);
-                    j += 1;
-                }
+            match alone {
+                true => self.state.warm_contacts.push(warm),
+                false => ws.listed_warm.push(warm),
             }
-            merged.extend_from_slice(&listed[i..]);
-            merged.extend_from_slice(&asleep[j..]);
-            std::mem::swap(&mut self.state.warm_contacts, merged);
+        }
+        if !alone {
+            let list = &mut self.state.warm_contacts;
+            let (listed, asleep) = (&ws.listed_warm, &ws.sleeping_warm);
+            // The same listed contacts as at the last merge, beside the
+            // same sleeping ones: the merge would lay the list out as it
+            // is, so the listed entries are written where they stand (a
+            // robot beside a sleeping heap copied every sleeping contact's
+            // warm start each step).
+            let same = ws.merged
+                && ws.listed_at.len() == listed.len()
+                && (listed.iter().zip(&ws.listed_at))
+                    .all(|(w, &k)| list.get(k as usize).is_some_and(|v| v.id == w.id));
+            if same {
+                for (w, &k) in listed.iter().zip(&ws.listed_at) {
+                    list[k as usize] = *w;
+                }
+            } else {
+                // Both ascending, with distinct ids (a listed contact has
+                // an awake body): merged.
+                list.clear();
+                ws.listed_at.clear();
+                let (mut i, mut j) = (0, 0);
+                while i < listed.len() && j < asleep.len() {
+                    if listed[i].id < asleep[j].id {
+                        ws.listed_at.push(list.len() as u32);
+                        list.push(listed[i]);
+                        i += 1;
+                    } else {
+                        list.push(asleep[j]);
+                        j += 1;
+                    }
+                }
+                for w in &listed[i..] {
+                    ws.listed_at.push(list.len() as u32);
+                    list.push(*w);
+                }
+                list.extend_from_slice(&asleep[j..]);
+                ws.merged = true;
+            }
         }
     }
 
