@@ -358,17 +358,47 @@ pub fn figures(
                 |y| sparse(y, |y| format!("{y:.0e}")),
             ),
         )?;
+        // Each point's label where it overlaps no label placed before:
+        // right of the point above or below it, else left of it, else none
+        // (a cluster of runs at one N keeps one label; one engine's runs
+        // with and without sleeping lie at nearly the same place, and
+        // their labels printed over each other).
+        let mut placed: Vec<[i32; 4]> = Vec::new();
         for ((key, pts), &(c, filled)) in curves.iter().zip(&styles) {
             let marker = if filled {
                 c.filled()
             } else {
                 c.stroke_width(1)
             };
+            let at: Vec<Option<(i32, i32)>> = pts
+                .iter()
+                .map(|r| {
+                    let (px, py) = chart.backend_coord(&(mean_ms(r), overlap(r)));
+                    let text = format!("N={}", r.n);
+                    let w = 7 * text.len() as i32;
+                    [(7, -7), (7, 5), (-7 - w, -7), (-7 - w, 5)]
+                        .into_iter()
+                        .find(|&(dx, dy)| {
+                            let b = [px + dx, py + dy - 1, px + dx + w, py + dy + 12];
+                            let clear = placed
+                                .iter()
+                                .all(|p| b[2] < p[0] || p[2] < b[0] || b[3] < p[1] || p[3] < b[1]);
+                            if clear {
+                                placed.push(b);
+                            }
+                            clear
+                        })
+                })
+                .collect();
             chart
-                .draw_series(pts.iter().map(|r| {
+                .draw_series(pts.iter().zip(at).map(|(r, at)| {
+                    let label = match at {
+                        Some(at) => Text::new(format!("N={}", r.n), at, (FONT, 11)),
+                        None => Text::new(String::new(), (0, 0), (FONT, 11)),
+                    };
                     EmptyElement::at((mean_ms(r), overlap(r)))
                         + Circle::new((0, 0), 5, marker)
-                        + Text::new(format!("N={}", r.n), (7, -7), (FONT, 11))
+                        + label
                 }))?
                 .label(key.clone())
                 .legend(move |(x, y)| Circle::new((x + 10, y), 5, marker));
