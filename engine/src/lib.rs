@@ -225,11 +225,14 @@ struct Workspace {
 
 /// The geometry the collision stage lists for `state` into `out`, with
 /// each body's `reach` (m). A contact with no awake body is not listed
-/// (`sleep::unlisted`).
+/// (`sleep::unlisted`). `awake`: the awake bodies as listed for `state`
+/// (see `collision::Still`: the sleeping ones, and their reach, are the
+/// same while the listing stands).
 fn list(
     model: &Model,
     state: &State,
     reach: &[f64],
+    awake: &sleep::Awake,
     scratch: &mut collision::Scratch,
     out: &mut Vec<Geometry>,
 ) {
@@ -238,6 +241,10 @@ fn list(
         collision::Listing::Within {
             reach,
             margin: p.contact_margin,
+            still: Some(collision::Still {
+                key: awake.listing(),
+                active: awake.bodies(),
+            }),
         }
     } else {
         collision::Listing::All
@@ -320,6 +327,7 @@ impl Workspace {
             model,
             state,
             &self.reach,
+            &self.awake,
             &mut self.collision,
             &mut self.ahead,
         );
@@ -328,10 +336,12 @@ impl Workspace {
     }
 
     fn detect(&mut self, model: &Model, state: &State) {
+        self.awake.refresh(state);
         list(
             model,
             state,
             &self.reach,
+            &self.awake,
             &mut self.collision,
             &mut self.geoms,
         );

@@ -19,11 +19,11 @@
 //! penetration of their contacts (`measure::Asleep`), is written again
 //! only when a body sleeps or wakes or a state is restored. What the
 //! island still costs is a few reads per body and step: its sleep tags,
-//! its potential energy, its keys in the broad phase's sort (a test per
-//! body and awake body while at most `collision::broad::FEW_ACTIVE` are
-//! awake), its bodies in the union-find of the islands, and its contacts'
-//! warm starts merged into the state's. A world asleep whole steps idle:
-//! the clock alone (`Engine::idle_step`, `Skips::idle`).
+//! its potential energy and its bodies in the union-find of the islands;
+//! the awake bodies find their partners among it in a grid of the
+//! sleeping bodies kept while the listing stands (`collision::Still`). A
+//! world asleep whole steps idle: the clock alone (`Engine::idle_step`,
+//! `Skips::idle`).
 //!
 //! It wakes, as one island, in the step where
 //!
@@ -112,6 +112,11 @@ impl Awake {
     /// The awake bodies as of the last [`Awake::refresh`].
     pub fn bodies(&self) -> &[u32] {
         &self.list
+    }
+
+    /// The last [`Awake::refresh`]'s listing number.
+    pub fn listing(&self) -> u64 {
+        self.listing
     }
 
     /// The next refresh lists again, and moves the listing, whatever the

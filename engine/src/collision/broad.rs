@@ -49,7 +49,36 @@ pub struct Broad {
     order: Vec<Near>,
     /// Both grids: the bodies' `Near`s in body order.
     gathered: Vec<Near>,
+    /// The inactive bodies by cell key (cells of `still_size`), kept from
+    /// call to call while the caller vouches that they are the same
+    /// ([`Still`]: `still_key`), and their largest radius plus reach.
+    still: Vec<(u64, Near)>,
+    still_key: Option<u64>,
+    still_size: f64,
+    still_grown: f64,
 }
+
+/// The caller's word that the inactive bodies (their centres, radii and
+/// reaches) are those of the last call that gave the same `key`, with the
+/// active bodies listed (ascending): the pairs are then found from a grid
+/// of the inactive bodies kept between calls, at a cost of the active
+/// bodies alone (a robot's links beside a sleeping heap: a grid of every
+/// body, or a test of each active body against every body, cost O(N) a
+/// step).
+#[derive(Debug, Clone, Copy)]
+pub struct Still<'a> {
+    pub key: u64,
+    pub active: &'a [u32],
+}
+
+/// The kept grid serves while the active bodies are at most this fraction
+/// of all (one in `STILL_FRACTION`); with more, a grid of every body is as
+/// cheap as their look-ups.
+const STILL_FRACTION: usize = 8;
+
+/// An active body whose reach spans more than this many cells of the kept
+/// grid is tested against every inactive body instead.
+const STILL_CELLS: i64 = 64;
 
 /// What the pair test reads of a body, gathered into cell order so that
 /// a body's neighbours are read from consecutive memory.
@@ -125,6 +154,7 @@ impl Broad {
     /// Fills `out` with every pair `(a, b)`, `a < b`, of the `n` spheres
     /// (centres `x`, radii `r`) with at least one `active` body whose gap
     /// is at most `reach(a) + reach(b) + margin`, sorted.
+    /// With `still` (see [`Still`]), the same pairs from the kept grid.
     #[allow(clippy::too_many_arguments)]
     pub fn pairs(
         &mut self,
@@ -134,16 +164,10 @@ impl Broad {
         reach: impl Fn(usize) -> f64,
         margin: f64,
         active: impl Fn(usize) -> bool,
+        still: Option<Still>,
         out: &mut Vec<(usize, usize)>,
     ) {
         out.clear();
-        // How many look for partners, counted up to one past `FEW_ACTIVE`.
-        let looking = (0..n).filter(|&i| active(i)).take(FEW_ACTIVE + 1).count();
-        // Nothing to look for: no grid (a sleeping pile's step spent a
-        // third of its time making it).
-        if n < 2 || looking == 0 {
-            return;
-        }
         let near = |i: usize| Near {
             x: x(i),
             r: r(i),
@@ -152,6 +176,24 @@ impl Broad {
             cell: 0,
             active: active(i),
         };
+        if let Some(still) = still.filter(|s| STILL_FRACTION * s.active.len() <= n) {
+            debug_assert!(still.active.iter().all(|&a| active(a as usize)));
+            if self.still_key != Some(still.key) {
+                self.keep_still(n, near, margin);
+                self.still_key = Some(still.key);
+            }
+            self.beside_still(still.active, near, margin, out);
+            out.sort_unstable();
+            out.dedup();
+            return;
+        }
+        // How many look for partners, counted up to one past `FEW_ACTIVE`.
+        let looking = (0..n).filter(|&i| active(i)).take(FEW_ACTIVE + 1).count();
+        // Nothing to look for: no grid (a sleeping pile's step spent a
+        // third of its time making it).
+        if n < 2 || looking == 0 {
+            return;
+        }
         if looking <= FEW_ACTIVE {
             for a in (0..n).filter(|&a| active(a)) {
                 let na = near(a);
@@ -171,6 +213,67 @@ impl Broad {
         }
         out.sort_unstable();
         out.dedup();
+    }
+
+    /// Makes the kept grid of the inactive bodies among the `n`.
+    fn keep_still(&mut self, n: usize, near: impl Fn(usize) -> Near, margin: f64) {
+        self.still.clear();
+        // Room for every body at once: a later listing with more of them
+        // asleep allocates nothing.
+        self.still.reserve(n);
+        self.still
+            .extend((0..n).map(&near).filter(|g| !g.active).map(|g| (0, g)));
+        self.still_grown = (self.still.iter()).fold(0.0f64, |m, (_, g)| m.max(g.r + g.reach));
+        self.still_size = (2.0 * self.still_grown + margin).max(f64::MIN_POSITIVE);
+        let size = self.still_size;
+        for (k, g) in &mut self.still {
+            *k = key(cell_of(&g.x, size));
+        }
+        self.still.sort_unstable_by_key(|&(k, g)| (k, g.body));
+    }
+
+    /// The pairs of each of the `active` bodies with the kept inactive
+    /// ones within its reach, and with each other (unsorted).
+    fn beside_still(
+        &mut self,
+        active: &[u32],
+        near: impl Fn(usize) -> Near,
+        margin: f64,
+        out: &mut Vec<(usize, usize)>,
+    ) {
+        for (k, &a) in active.iter().enumerate() {
+            let na = near(a as usize);
+            for &b in &active[k + 1..] {
+                test(&na, &near(b as usize), margin, out);
+            }
+            // Every inactive body whose pair `test` can list has its
+            // centre within `r_a + reach_a + margin` plus its own radius
+            // and reach of A's on each axis (a little more, for the
+            // test's roundings).
+            let range = (na.r + na.reach + margin + self.still_grown) * (1.0 + 1e-9) + 1e-12;
+            let size = self.still_size;
+            let lo = cell_of(&na.x.add_scalar(-range), size);
+            let hi = cell_of(&na.x.add_scalar(range), size);
+            let span = |k: usize| hi[k].saturating_sub(lo[k]).saturating_add(1);
+            let cells = span(0).saturating_mul(span(1)).saturating_mul(span(2));
+            if !(1..=STILL_CELLS).contains(&cells) {
+                for (_, nb) in &self.still {
+                    test(&na, nb, margin, out);
+                }
+                continue;
+            }
+            for cx in lo[0]..=hi[0] {
+                for cy in lo[1]..=hi[1] {
+                    for cz in lo[2]..=hi[2] {
+                        let k = key([cx, cy, cz]);
+                        let start = self.still.partition_point(|&(ck, _)| ck < k);
+                        for (_, nb) in self.still[start..].iter().take_while(|(ck, _)| *ck == k) {
+                            test(&na, nb, margin, out);
+                        }
+                    }
+                }
+            }
+        }
     }
 
     /// The dense grid: the bounding box of the bodies' cells as one array
@@ -336,18 +439,10 @@ mod tests {
                     |i| reach[i],
                     margin,
                     active,
+                    None,
                     &mut got,
                 );
-                let mut want = Vec::new();
-                for a in 0..300 {
-                    for b in a + 1..300 {
-                        let near =
-                            (x[b] - x[a]).norm() - r[a] - r[b] <= reach[a] + reach[b] + margin;
-                        if near && (active(a) || active(b)) {
-                            want.push((a, b));
-                        }
-                    }
-                }
+                let want = brute(&x, &r, &reach, margin, active);
                 assert_eq!(got, want, "seed {seed}, far {far}");
                 assert!(!want.is_empty());
                 // Which grid listed them (none for `FEW_ACTIVE`).
@@ -356,5 +451,83 @@ mod tests {
                 assert_eq!(broad.order.is_empty(), far || few, "seed {seed}");
             }
         }
+    }
+
+    /// The brute force's pairs of `x` with at least one `active` body.
+    fn brute(
+        x: &[Vector3<f64>],
+        r: &[f64],
+        reach: &[f64],
+        margin: f64,
+        active: impl Fn(usize) -> bool,
+    ) -> Vec<(usize, usize)> {
+        let mut want = Vec::new();
+        for a in 0..x.len() {
+            for b in a + 1..x.len() {
+                let near = (x[b] - x[a]).norm() - r[a] - r[b] <= reach[a] + reach[b] + margin;
+                if near && (active(a) || active(b)) {
+                    want.push((a, b));
+                }
+            }
+        }
+        want
+    }
+
+    /// The grid of the inactive bodies kept from call to call (`Still`)
+    /// gives the brute force's pairs, also after the active bodies moved
+    /// and while the same key vouches for the others; a new key makes it
+    /// again (the inactive bodies moved too). Some active bodies reach
+    /// far (more cells than `STILL_CELLS`: tested against every one).
+    #[test]
+    fn the_kept_grid_of_still_bodies_finds_exactly_the_pairs_of_the_brute_force() {
+        let mut got = Vec::new();
+        let margin = 1e-3;
+        let mut tested = 0;
+        for seed in 1..20u64 {
+            let mut x = points(400, seed);
+            let r: Vec<f64> = (0..400)
+                .map(|i| 0.02 + 0.03 * ((i * 7) % 5) as f64 / 5.0)
+                .collect();
+            let mut reach: Vec<f64> = (0..400)
+                .map(|i| if i % 11 == 0 { 0.1 } else { 0.001 })
+                .collect();
+            // 20 active bodies, one of them fast.
+            let active: Vec<u32> = (0..400).filter(|i| i % 20 == (seed % 20) as u32).collect();
+            reach[active[3] as usize] = 5.0;
+            let is = |i: usize| active.contains(&(i as u32));
+            let mut broad = Broad::default();
+            for (call, key) in [(0, 7), (1, 7), (2, 8)] {
+                if call > 0 {
+                    // The active bodies move (and, for the new key, the
+                    // others too).
+                    let shift = points(400, seed + 100 * call);
+                    for i in 0..400 {
+                        if is(i) || key == 8 {
+                            x[i] += 0.1 * shift[i];
+                        }
+                    }
+                }
+                let still = Some(Still {
+                    key,
+                    active: &active,
+                });
+                broad.pairs(
+                    400,
+                    |i| x[i],
+                    |i| r[i],
+                    |i| reach[i],
+                    margin,
+                    is,
+                    still,
+                    &mut got,
+                );
+                let want = brute(&x, &r, &reach, margin, is);
+                assert_eq!(got, want, "seed {seed}, call {call}");
+                assert!(!want.is_empty());
+                tested += 1;
+            }
+            assert_eq!(broad.still.len(), 380);
+        }
+        assert_eq!(tested, 57);
     }
 }

@@ -9,6 +9,7 @@
 mod box_box;
 mod box_plane;
 mod broad;
+pub use broad::Still;
 mod capsule_box;
 mod capsule_capsule;
 mod capsule_plane;
@@ -77,7 +78,16 @@ pub enum Listing<'a> {
     /// normal speed against the plane being at most its speed). The others
     /// cannot close within a step in which no body travels farther than its
     /// reach (m).
-    Within { reach: &'a [f64], margin: f64 },
+    ///
+    /// With `still`, the caller vouches for the sleeping bodies as
+    /// [`Still`] says, and lists the awake ones: under
+    /// [`Keep::Awake`], the awake bodies look up their partners in a grid
+    /// of the sleeping ones kept from call to call.
+    Within {
+        reach: &'a [f64],
+        margin: f64,
+        still: Option<Still<'a>>,
+    },
     /// Those that overlap (`Within` with no reach and no margin): all that
     /// a penetration can be measured on.
     Overlapping,
@@ -286,7 +296,17 @@ pub fn detect(
         }
     };
     let bound = |i: usize| model.bodies[i].shape.bounding_radius();
-    for i in 0..model.bodies.len() {
+    // The caller's list of the awake bodies, where it vouches for the
+    // sleeping ones (`Listing::Within`): only those bodies' contacts are
+    // kept.
+    let still = match (keep, &listing) {
+        (Keep::Awake, Listing::Within { still, .. }) => *still,
+        _ => None,
+    };
+    let every = 0..model.bodies.len() as u32;
+    let bodies = still.map_or(Either::Every(every), |s| Either::Listed(s.active.iter()));
+    for i in bodies {
+        let i = i as usize;
         // A body welded to the world is the world's (`Model::weld`).
         if model.weld[i] == crate::model::WELDED_TO_WORLD {
             continue;
@@ -331,10 +351,27 @@ pub fn detect(
         listing.margin(),
         // Only the awake bodies look for partners when those are kept.
         |i| keep != Keep::Awake || !sleep::asleep(state, i),
+        still,
         pairs,
     );
     for &(i, j) in pairs.iter().filter(|p| apart(p)) {
         body_pair(model, state, i, j, within(reach(i) + reach(j)), out);
+    }
+}
+
+/// Body indices: every one, or a list's.
+enum Either<'a> {
+    Every(std::ops::Range<u32>),
+    Listed(std::slice::Iter<'a, u32>),
+}
+
+impl Iterator for Either<'_> {
+    type Item = u32;
+    fn next(&mut self) -> Option<u32> {
+        match self {
+            Either::Every(r) => r.next(),
+            Either::Listed(l) => l.next().copied(),
+        }
     }
 }
 
