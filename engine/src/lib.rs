@@ -202,10 +202,10 @@ struct Workspace {
     minv_written: sleep::Written,
     nu_free_written: sleep::Written,
     /// The warm starts of sleeping islands' contacts, kept while they are
-    /// not listed (`record_impulses`), and the sleep tags they were picked
-    /// under (empty: to pick again, as after `Engine::set_state`).
+    /// not listed (`record_impulses`), and the listing of `awake` they were
+    /// picked at (a restored state moves it: picked again from its list).
     sleeping_warm: Vec<WarmContact>,
-    sleeping_tags: Vec<u32>,
+    sleeping_picked: sleep::Written,
     /// Scratch of `record_impulses` while some contacts sleep: the listed
     /// contacts' warm starts, and where the last merge put them among the
     /// sleeping ones' in the state's list (valid while `merged` holds).
@@ -493,10 +493,9 @@ impl Engine {
         self.ws.ahead_listed = false;
         self.all_asleep = false;
         self.idle = None;
-        // Its warm starts are not the ones the sleeping part was picked from.
-        self.ws.sleeping_tags.clear();
-        // Nor need its sleeping bodies be at rest where the kept entries
-        // (`Workspace::awake`) were written.
+        // Its sleeping bodies need not be at rest where the kept entries
+        // (`Workspace::awake`) were written, nor its warm starts be those
+        // the sleeping part was picked from (`sleeping_warm`).
         self.ws.awake.forget();
     }
 
@@ -1196,7 +1195,8 @@ impl Engine {
         // have, the unlisted ones still have none. (Picking them again
         // looked up every contact's bodies: a fifth of the step of a
         // sleeping pile.)
-        if ws.sleeping_tags != self.state.sleep_tag {
+        let listing = ws.awake.refresh(&self.state);
+        if ws.sleeping_picked.every_body(listing) {
             // Picked again: the state's list is merged afresh below.
             ws.merged = false;
             ws.sleeping_warm.clear();
@@ -1208,7 +1208,6 @@ impl Engine {
                         sleep::unlisted(state, a, b)
                     }));
             }
-            ws.sleeping_tags.clone_from(&self.state.sleep_tag);
         }
         // Filled below in the LCP's contact order, which is ascending id:
         // the state's list itself when no contact sleeps, else the listed
