@@ -286,8 +286,7 @@ impl Workspace {
             self.detect(model, state);
         }
         // Zero for a sleeping body: static for the step.
-        let listing = self.awake.refresh(state);
-        let only = (!self.minv_written.every_body(listing)).then(|| self.awake.bodies());
+        let only = self.awake.only(state, &mut self.minv_written);
         applied::inverse_masses(model, state, only, &mut self.minv);
     }
 
@@ -301,13 +300,15 @@ impl Workspace {
             let (b, m) = (&state.bodies[i], &model.bodies[i]);
             p.h * (b.v.norm() + b.w.norm() * m.shape.spin_reach() + 2.0 * p.h * g)
         };
-        let listing = self.awake.refresh(state);
-        if self.reach_written.every_body(listing) {
-            self.reach.clear();
-            self.reach.extend((0..state.bodies.len()).map(of));
-        } else {
-            for &i in self.awake.bodies() {
-                self.reach[i as usize] = of(i as usize);
+        match self.awake.only(state, &mut self.reach_written) {
+            Some(awake) => {
+                for &i in awake {
+                    self.reach[i as usize] = of(i as usize);
+                }
+            }
+            None => {
+                self.reach.clear();
+                self.reach.extend((0..state.bodies.len()).map(of));
             }
         }
     }
@@ -403,8 +404,7 @@ impl Workspace {
     /// step's own.
     fn select(&mut self, model: &Model, state: &State, inputs: &Inputs) {
         // Zero for a sleeping body: static for the step.
-        let listing = self.awake.refresh(state);
-        let only = (!self.nu_free_written.every_body(listing)).then(|| self.awake.bodies());
+        let only = self.awake.only(state, &mut self.nu_free_written);
         applied::free_velocity(model, state, inputs, &self.minv, only, &mut self.nu_free);
         if self.widen(model, state, Speeds::Free) {
             // The contact indices changed: a matrix made for the old list

@@ -114,6 +114,14 @@ impl Awake {
         &self.list
     }
 
+    /// The awake bodies of `state` where `written` stands at the present
+    /// listing (a pass may write them alone), else `None` (it must write
+    /// every body, and `written` now stands).
+    pub fn only(&mut self, state: &State, written: &mut Written) -> Option<&[u32]> {
+        let listing = self.refresh(state);
+        (!written.every_body(listing)).then_some(&self.list[..])
+    }
+
     /// The last [`Awake::refresh`]'s listing number.
     pub fn listing(&self) -> u64 {
         self.listing
@@ -287,18 +295,13 @@ pub fn update(
             true => params.angular.max(linear / reach),
             false => params.angular,
         };
-        let resting = b.v.norm() < linear && b.w.norm() < angular;
+        // Bodies on joints are awake, and stay so.
+        let resting = b.v.norm() < linear && b.w.norm() < angular && !model.jointed[i];
         state.rest[i] = if resting {
             state.rest[i].saturating_add(1)
         } else {
             0
         };
-    }
-    // Bodies on joints are awake, and stay so.
-    for &i in awake.bodies() {
-        if model.jointed[i as usize] {
-            state.rest[i as usize] = 0;
-        }
     }
     // Steps at rest an island needs: `after` seconds, at least one step.
     let need = ((params.after / h).ceil() as u32).max(1);

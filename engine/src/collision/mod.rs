@@ -303,10 +303,15 @@ pub fn detect(
         (Keep::Awake, Listing::Within { still, .. }) => *still,
         _ => None,
     };
-    let every = 0..model.bodies.len() as u32;
-    let bodies = still.map_or(Either::Every(every), |s| Either::Listed(s.active.iter()));
+    let (mut every, mut listed) = (
+        0..model.bodies.len(),
+        still.map(|s| s.active.iter().map(|&i| i as usize)),
+    );
+    let bodies: &mut dyn Iterator<Item = usize> = match &mut listed {
+        Some(listed) => listed,
+        None => &mut every,
+    };
     for i in bodies {
-        let i = i as usize;
         // A body welded to the world is the world's (`Model::weld`).
         if model.weld[i] == crate::model::WELDED_TO_WORLD {
             continue;
@@ -356,22 +361,6 @@ pub fn detect(
     );
     for &(i, j) in pairs.iter().filter(|p| apart(p)) {
         body_pair(model, state, i, j, within(reach(i) + reach(j)), out);
-    }
-}
-
-/// Body indices: every one, or a list's.
-enum Either<'a> {
-    Every(std::ops::Range<u32>),
-    Listed(std::slice::Iter<'a, u32>),
-}
-
-impl Iterator for Either<'_> {
-    type Item = u32;
-    fn next(&mut self) -> Option<u32> {
-        match self {
-            Either::Every(r) => r.next(),
-            Either::Listed(l) => l.next().copied(),
-        }
     }
 }
 
