@@ -6,7 +6,7 @@
 //! many layers that widens with N, and the walls 0.05 m outside it.
 
 use crate::bench::robust::Rng;
-use crate::bench::text::{plane, sphere};
+use crate::bench::text::{joint, plane, sphere};
 use crate::engine::solver::PgsParams;
 use cosim_shared::scene::SleepDesc;
 use cosim_shared::Scene;
@@ -181,7 +181,7 @@ pub struct Settings {
     /// Islands at rest sleep at these thresholds (`[sim.sleep]`).
     pub sleep: Option<SleepDesc>,
     pub shape: Shape,
-    /// A pendulum swings above the pile ([`PENDULUM`]): a body that never
+    /// A pendulum swings above the pile ([`pendulum`]): a body that never
     /// sleeps beside a pile that does, as a robot's links beside a heap.
     pub pendulum: bool,
 }
@@ -190,7 +190,18 @@ pub struct Settings {
 /// centre, 0.5 m below it and swinging at 0.5 m/s: it never reaches the
 /// pile (the cube of 10,000 is 22 layers, about 2.7 m tall) and, on a
 /// joint, never sleeps.
-pub const PENDULUM: &str = "[[body]]\nname = \"bob\"\nradius = 0.05\nmass = 1.0\nposition = [0.0, 0.0, 5.5]\nvelocity = [0.5, 0.0, 0.0]\nfriction = 0.5\nrestitution = 0.0\n\n[[joint]]\nname = \"pivot\"\ntype = \"spherical\"\nbody_a = \"world\"\nbody_b = \"bob\"\nanchor = [0.0, 0.0, 6.0]\n";
+pub fn pendulum() -> String {
+    let bob = sphere(
+        "bob",
+        RADIUS,
+        1.0,
+        [0.0, 0.0, 5.5],
+        [0.5, 0.0, 0.0],
+        0.5,
+        0.0,
+    );
+    bob + &joint("pivot", "world", "bob", [0.0, 0.0, 6.0])
+}
 
 /// One pile run's figures (`bench pile`).
 #[derive(Debug, Clone, Default)]
@@ -241,7 +252,7 @@ pub fn run(n: usize, settings: &Settings) -> Outcome {
     } = *settings;
     let mut text = text_shaped(n, shape, dt, 4, solver, steps, seed, sleep);
     if pendulum {
-        text += PENDULUM;
+        text += &self::pendulum();
     }
     let scene =
         Scene::parse(&text, "<pile>").unwrap_or_else(|e| panic!("the pile scene is valid: {e}"));
