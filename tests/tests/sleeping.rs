@@ -484,47 +484,49 @@ fn a_world_asleep_whole_steps_idle_with_the_full_steps_bits() {
 #[test]
 fn what_the_awake_passes_keep_for_sleeping_bodies_is_what_a_full_pass_writes() {
     use cosim_server::bench::robust;
-    use cosim_server::engine::sleep;
+    use cosim_server::engine::{sleep, StepReport};
+    // A step of `straight`, pushed on body `push` if any, and the same
+    // step of an engine new to its state: state and report to the bit.
+    let step_both = |straight: &mut Engine, push: Option<usize>, what: &str| -> StepReport {
+        let mut fresh = Engine::new(straight.model().clone());
+        fresh.set_state(straight.state().clone());
+        if let Some(i) = push {
+            for e in [&mut *straight, &mut fresh] {
+                e.add_body_impulse(i, Vector3::new(0.3, 0.0, 0.5), Vector3::zeros())
+                    .expect("a body of the scene");
+            }
+        }
+        let (a, b) = (straight.step(), fresh.step());
+        assert!(
+            straight.state() == fresh.state(),
+            "{what}: the states differ"
+        );
+        let bits = |r: &StepReport| {
+            (
+                r.max_penetration.to_bits(),
+                r.energy.total.to_bits(),
+                r.energy.midpoint.to_bits(),
+                r.sleeping,
+                r.pivots,
+                r.active_contacts,
+                r.error.is_some(),
+            )
+        };
+        assert_eq!(bits(&a), bits(&b), "{what}: the reports differ");
+        a
+    };
     let (mut beside, mut moved_asleep) = (0, 0);
     for seed in 1..=60 {
         let model = Model::from_scene(&robust::sleeping_scene(seed));
         let n = model.bodies.len();
-        let mut straight = Engine::new(model.clone());
+        let mut straight = Engine::new(model);
         let mut states = vec![straight.state().clone()];
         for step in 1..=30 {
             if step == 25 {
                 straight.set_state(states[15].clone());
             }
-            let mut fresh = Engine::new(model.clone());
-            fresh.set_state(straight.state().clone());
-            if step == 12 || step == 20 {
-                let i = (seed as usize + step) % n;
-                for e in [&mut straight, &mut fresh] {
-                    e.add_body_impulse(i, Vector3::new(0.3, 0.0, 0.5), Vector3::zeros())
-                        .expect("a body of the scene");
-                }
-            }
-            let (a, b) = (straight.step(), fresh.step());
-            assert!(
-                straight.state() == fresh.state(),
-                "seed {seed} step {step}: the states differ"
-            );
-            let bits = |r: &cosim_server::engine::StepReport| {
-                (
-                    r.max_penetration.to_bits(),
-                    r.energy.total.to_bits(),
-                    r.energy.midpoint.to_bits(),
-                    r.sleeping,
-                    r.pivots,
-                    r.active_contacts,
-                    r.error.is_some(),
-                )
-            };
-            assert_eq!(
-                bits(&a),
-                bits(&b),
-                "seed {seed} step {step}: the reports differ"
-            );
+            let push = (step == 12 || step == 20).then_some((seed as usize + step) % n);
+            let a = step_both(&mut straight, push, &format!("seed {seed} step {step}"));
             beside += usize::from(a.sleeping > 0 && a.sleeping < n);
             states.push(straight.state().clone());
         }
@@ -535,16 +537,8 @@ fn what_the_awake_passes_keep_for_sleeping_bodies_is_what_a_full_pass_writes() {
         };
         let mut moved = straight.state().clone();
         moved.bodies[i].x.z -= 0.02;
-        straight.set_state(moved.clone());
-        let mut fresh = Engine::new(model.clone());
-        fresh.set_state(moved);
-        let (a, b) = (straight.step(), fresh.step());
-        assert!(straight.state() == fresh.state(), "seed {seed}: moved {i}");
-        assert_eq!(
-            a.max_penetration.to_bits(),
-            b.max_penetration.to_bits(),
-            "seed {seed}: moved {i}"
-        );
+        straight.set_state(moved);
+        step_both(&mut straight, None, &format!("seed {seed}: moved {i}"));
         moved_asleep += 1;
     }
     assert!(
@@ -557,15 +551,10 @@ fn what_the_awake_passes_keep_for_sleeping_bodies_is_what_a_full_pass_writes() {
     // the sleeping ones' warm starts (some steps list as many as the step
     // before, but others).
     let scene = cosim_shared::Scene::parse(&sleeping_pile(1000), "<pile>").unwrap();
-    let model = Model::from_scene(&scene);
-    let mut straight = Engine::new(model.clone());
+    let mut straight = Engine::new(Model::from_scene(&scene));
     let mut beside = 0;
     for step in 1..=310 {
-        let mut fresh = Engine::new(model.clone());
-        fresh.set_state(straight.state().clone());
-        let (a, b) = (straight.step(), fresh.step());
-        assert!(straight.state() == fresh.state(), "pile step {step}");
-        assert_eq!(a.max_penetration.to_bits(), b.max_penetration.to_bits());
+        let a = step_both(&mut straight, None, &format!("pile step {step}"));
         beside += usize::from(a.sleeping > 0 && a.sleeping < 1000);
     }
     assert!(beside >= 100, "{beside} pile steps partly asleep");
