@@ -90,7 +90,7 @@ impl Writers {
 
     /// One row per joint of the engine's current state (`JOINTS_HEADER`).
     fn joints(&mut self, engine: &Engine) -> io::Result<()> {
-        use crate::engine::joint;
+        use crate::engine::constraint::joint;
         use std::fmt::Write as _;
         let s = engine.state();
         self.line.clear();
@@ -216,7 +216,7 @@ pub fn contact_name(model: &Model, id: usize, a: Party, b: Party) -> String {
 
 /// The ladder's counts as `summary.json` holds them: steps by the highest
 /// rung of Lemke's ladder they needed, refined answers, and the steps that
-/// fell back to another formulation (see `engine::fallback`).
+/// fell back to another formulation (see `engine::solver::fallback`).
 pub fn ladder_json(c: &crate::engine::LadderCounts) -> serde_json::Value {
     use crate::engine::solver::Rung;
     let mut rungs = serde_json::Map::new();

@@ -2268,7 +2268,8 @@ fn the_live_view_serves_foxglove_the_servers_states() {
 /// bit, and the last one an offline run's with the same force.
 #[test]
 fn frames_carry_the_joints_coordinates() {
-    use cosim_server::engine::{joint, Engine, Model};
+    use cosim_server::engine::constraint::joint;
+    use cosim_server::engine::{Engine, Model};
     let scene = SLIDER;
     let steps = 300u64;
     let (server, dir, name) = serve_test(
@@ -2401,7 +2402,8 @@ const LIMITS: &str = concat!(
 /// to the same hashes.
 #[test]
 fn a_controllers_motor_target_drives_the_served_run_and_replays() {
-    use cosim_server::engine::{joint, Engine, Model};
+    use cosim_server::engine::constraint::joint;
+    use cosim_server::engine::{Engine, Model};
     let steps = 200u64;
     let (server, dir, name) = serve_test(
         "motor-targets",

@@ -3,7 +3,8 @@
 //! normal and lever arms, how many points and which features, and the
 //! ids that name them back.
 
-use cosim_server::engine::collision::{body_pair, body_plane, Counterpart, Geometry};
+use cosim_server::engine::collision::{body_pair, body_plane, Geometry};
+use cosim_server::engine::model::Counterpart;
 use cosim_server::engine::{Engine, Model};
 use cosim_tests::*;
 use nalgebra::{UnitQuaternion, Vector3};

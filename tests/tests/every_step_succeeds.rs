@@ -223,7 +223,7 @@ fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
 
 /// The same bounds with the iterative solver (200 scenes: PGS is slower on
 /// the locked ones, which run to its iteration cap before the relaxed
-/// retry; `engine::iterative`).
+/// retry; `engine::solver::iterative`).
 #[test]
 fn two_hundred_random_scenes_with_pgs_keep_their_energy() {
     let s = robust::run(200, 20, 1, SolverChoice::Pgs).unwrap_or_else(|e| panic!("{e}"));

@@ -3,7 +3,7 @@
 //! `2 pi sqrt(I / (m g l))`, a hinge that keeps its body in the plane
 //! normal to its axis, and a fixed joint that holds two bodies as one.
 
-use cosim_server::engine::joint::{angle_error, coordinate};
+use cosim_server::engine::constraint::joint::{angle_error, coordinate};
 use cosim_tests::*;
 use nalgebra::Vector3;
 use std::f64::consts::{PI, TAU};

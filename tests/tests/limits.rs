@@ -6,7 +6,7 @@
 //! DEFAULT_PGS_TOLERANCE (m/s, or rad/s for a hinge's row) of the exact
 //! one, an error that adds up over the run's time; Lemke's is round-off.
 
-use cosim_server::engine::joint::coordinate;
+use cosim_server::engine::constraint::joint::coordinate;
 use cosim_server::engine::{Engine, ImpulseKind, Party};
 use cosim_shared::DEFAULT_PGS_TOLERANCE;
 use cosim_tests::*;

@@ -5,7 +5,7 @@
 //! DEFAULT_PGS_TOLERANCE (m/s or rad/s) of the exact ones, Lemke's are
 //! round-off.
 
-use cosim_server::engine::joint::coordinate;
+use cosim_server::engine::constraint::joint::coordinate;
 use cosim_server::engine::{Engine, ImpulseKind, InputError};
 use cosim_shared::DEFAULT_PGS_TOLERANCE;
 use cosim_tests::*;

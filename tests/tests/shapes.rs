@@ -7,7 +7,8 @@
 //! within DEFAULT_PGS_TOLERANCE (m/s) of the exact one, an error that adds
 //! up over the run's time; Lemke's is round-off.
 
-use cosim_server::engine::collision::{vertex, Counterpart};
+use cosim_server::engine::collision::vertex;
+use cosim_server::engine::model::Counterpart;
 use cosim_server::engine::{Engine, ImpulseKind};
 use cosim_shared::DEFAULT_PGS_TOLERANCE;
 use cosim_tests::*;

@@ -122,7 +122,8 @@ fn the_broad_phase_widens_for_fast_free_and_new_speeds() {
 #[test]
 fn the_measurement_s_listing_serves_the_next_step_and_no_other() {
     use cosim_server::bench::robust;
-    use cosim_server::engine::{measure, sleep, Engine, Model};
+    use cosim_server::engine::model::state;
+    use cosim_server::engine::{measure, Engine, Model};
     use nalgebra::Vector3;
     let (mut restored, mut woken) = (0, 0);
     for seed in 1..=80 {
@@ -156,7 +157,7 @@ fn the_measurement_s_listing_serves_the_next_step_and_no_other() {
         restored += 1;
         // A push on a sleeping body after a step: the step an engine new
         // to that state takes with the same push.
-        let Some(i) = (0..model.bodies.len()).find(|&i| sleep::asleep(e.state(), i)) else {
+        let Some(i) = (0..model.bodies.len()).find(|&i| state::asleep(e.state(), i)) else {
             continue;
         };
         let push = Vector3::new(0.0, 0.0, 1e-3 * model.bodies[i].mass);

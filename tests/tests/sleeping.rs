@@ -159,7 +159,7 @@ fn a_bad_sleep_threshold_is_named() {
 
 #[test]
 fn contact_ids_name_their_bodies_back() {
-    use cosim_server::engine::collision::Counterpart;
+    use cosim_server::engine::model::Counterpart;
     let m = scene(None, SLEEP);
     let n = m.bodies.len();
     for a in 0..n {
@@ -192,7 +192,7 @@ fn contact_ids_name_their_bodies_back() {
 /// PGS, the woken step needs few sweeps.
 #[test]
 fn a_sleeping_island_keeps_its_warm_start() {
-    use cosim_server::engine::collision::Counterpart;
+    use cosim_server::engine::model::Counterpart;
     let mut model = scene(None, SLEEP);
     model.params.solver = cosim_shared::SolverChoice::Pgs;
     let floor = model.contact_id(0, Counterpart::Plane(0), 0);
@@ -300,7 +300,7 @@ fn the_thousand_pile_falls_asleep_whole_at_the_default_thresholds() {
 /// stack never slept, as the 1,000 pile did not for one spinning sphere.
 #[test]
 fn a_spinning_neighbour_that_does_not_touch_leaves_a_stack_asleep() {
-    use cosim_server::engine::collision::Counterpart;
+    use cosim_server::engine::model::Counterpart;
     let gap = 5e-4;
     let text = format!(
         "[sim]\nname = \"spinner\"\ndt = 0.001\nsteps = 10\nsolver = \"lemke\"\n\n{SLEEP}\n{}{}{}[[body]]\nname = \"spinner\"\nradius = {R:e}\nmass = 1.0\nposition = [{:e}, 0.0, {R:e}]\nangular_velocity = [0.0, 0.0, 5.0]\nfriction = 0.5\nrestitution = 0.0\n",
@@ -484,7 +484,8 @@ fn a_world_asleep_whole_steps_idle_with_the_full_steps_bits() {
 #[test]
 fn what_the_awake_passes_keep_for_sleeping_bodies_is_what_a_full_pass_writes() {
     use cosim_server::bench::robust;
-    use cosim_server::engine::{sleep, StepReport};
+    use cosim_server::engine::model::state;
+    use cosim_server::engine::StepReport;
     // A step of `straight`, pushed on body `push` if any, and the same
     // step of an engine new to its state: state and report to the bit.
     let step_both = |straight: &mut Engine, push: Option<usize>, what: &str| -> StepReport {
@@ -532,7 +533,7 @@ fn what_the_awake_passes_keep_for_sleeping_bodies_is_what_a_full_pass_writes() {
         }
         // A state whose sleeping body sits elsewhere, with the same tags:
         // what was kept for the old poses does not stand.
-        let Some(i) = (0..n).find(|&i| sleep::asleep(straight.state(), i)) else {
+        let Some(i) = (0..n).find(|&i| state::asleep(straight.state(), i)) else {
             continue;
         };
         let mut moved = straight.state().clone();

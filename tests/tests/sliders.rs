@@ -3,7 +3,7 @@
 //! the angular momentum (which fails if the rows' lever arm misses the
 //! slide's travel: joint.rs).
 
-use cosim_server::engine::joint::{angle_error, coordinate};
+use cosim_server::engine::constraint::joint::{angle_error, coordinate};
 use cosim_server::engine::Engine;
 use cosim_shared::DEFAULT_PGS_TOLERANCE;
 use cosim_tests::*;

@@ -2,7 +2,7 @@
 //! scene its links and joints describe, runs ten times its duration with
 //! each solver, and what lies outside the subset is refused by name.
 
-use cosim_server::engine::joint::coordinate;
+use cosim_server::engine::constraint::joint::coordinate;
 use cosim_server::engine::model::Shape;
 use cosim_server::engine::{Attachment, Engine, Model, Turning};
 use cosim_shared::{Scene, SolverChoice};

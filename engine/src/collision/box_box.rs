@@ -1,5 +1,6 @@
 use super::segment::{nearest_between_segments, Pose};
-use super::{Counterpart, Geometry};
+use super::Geometry;
+use crate::model::Counterpart;
 use nalgebra::Vector3;
 
 /// How much more separation (m) an axis needs than the best face axis to

@@ -1,5 +1,6 @@
 use super::segment::Pose;
-use super::{Counterpart, Geometry};
+use super::Geometry;
+use crate::model::Counterpart;
 use crate::model::Plane;
 use nalgebra::Vector3;
 

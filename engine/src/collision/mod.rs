@@ -19,9 +19,8 @@ mod sphere_capsule;
 mod sphere_plane;
 mod sphere_sphere;
 
-use super::model::{Model, Plane, Shape};
-use super::sleep;
-use super::state::State;
+use crate::model::state::{self, State};
+use crate::model::{Counterpart, Model, Plane, Shape};
 use nalgebra::Vector3;
 
 pub use box_plane::vertex;
@@ -29,16 +28,6 @@ pub use broad::Broad;
 pub use segment::Pose;
 pub use sphere_plane::sphere_plane;
 pub use sphere_sphere::sphere_sphere;
-
-/// What body A of a contact touches.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Counterpart {
-    Plane(usize),
-    Body(usize),
-    /// The fixed world: a joint limit's other side when the joint holds a
-    /// body to the world (`joint::limits`).
-    World,
-}
 
 /// The geometry of one potential contact between body `a` and `b`.
 #[derive(Debug, Clone, Copy)]
@@ -276,15 +265,15 @@ pub fn detect(
 ) {
     out.clear();
     // Without a sleeping body, `Awake` is `Every` and `Asleep` is none.
-    let keep = match (keep, sleep::any_asleep(state)) {
+    let keep = match (keep, state::any_asleep(state)) {
         (Keep::Asleep, false) => return,
         (Keep::Awake, false) => Keep::Every,
         (k, _) => k,
     };
     let kept = |i: usize, b: Counterpart| match keep {
         Keep::Every => true,
-        Keep::Awake => !sleep::unlisted(state, i, b),
-        Keep::Asleep => sleep::unlisted(state, i, b),
+        Keep::Awake => !state::unlisted(state, i, b),
+        Keep::Asleep => state::unlisted(state, i, b),
     };
     let all = matches!(listing, Listing::All);
     // The gap up to which a contact is listed: none beyond for `All`.
@@ -355,7 +344,7 @@ pub fn detect(
         reach,
         listing.margin(),
         // Only the awake bodies look for partners when those are kept.
-        |i| keep != Keep::Awake || !sleep::asleep(state, i),
+        |i| keep != Keep::Awake || !state::asleep(state, i),
         still,
         pairs,
     );

@@ -1,5 +1,6 @@
 use super::segment::{box_surface, Pose};
-use super::{Counterpart, Geometry};
+use super::Geometry;
+use crate::model::Counterpart;
 use nalgebra::Vector3;
 
 /// A ball (centre `c`, radius `r`; part of body A at lever offset

@@ -1,4 +1,5 @@
-use super::{Counterpart, Geometry};
+use super::Geometry;
+use crate::model::Counterpart;
 use crate::model::Plane;
 use nalgebra::Vector3;
 

@@ -1,4 +1,5 @@
-use super::{Counterpart, Geometry};
+use super::Geometry;
+use crate::model::Counterpart;
 use nalgebra::Vector3;
 
 /// Two spheres: the normal joins the centres, from B towards A.

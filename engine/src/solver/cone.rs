@@ -9,7 +9,7 @@
 //! direction coefficients was most of a sweep's time. The tables hold the
 //! same expressions' values as [`direction`], so both give the same bits.
 
-use crate::contact::direction_coefficients as direction;
+use crate::constraint::contact::direction_coefficients as direction;
 
 /// The polygon of the polyhedral cone with `n_d` directions, tabulated.
 #[derive(Debug, Default, Clone)]

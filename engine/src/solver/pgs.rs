@@ -23,64 +23,16 @@
 use super::cone::{decompose, Polygon};
 pub use super::cone::{project_cone, project_disc, project_polygon};
 use super::Lcp;
-use crate::applied::InvMass;
-use crate::contact::direction_coefficients as direction;
-use crate::island::Groups;
-use crate::rows::Row;
+use crate::constraint::applied::InvMass;
+use crate::constraint::contact::direction_coefficients as direction;
+use crate::constraint::rows::Row;
+pub use crate::model::params::{
+    PgsParams, Stop, DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, DEFAULT_VELOCITY_TOLERANCE,
+};
+use crate::solver::island::Groups;
 
-/// Default stopping tolerance on the relative residual.
-pub const DEFAULT_TOLERANCE: f64 = 1e-10;
-/// Default iteration (sweep) cap.
-pub const DEFAULT_MAX_ITERATIONS: usize = cosim_shared::DEFAULT_PGS_MAX_ITERATIONS;
-/// Default physical stopping tolerance (m/s): see [`Pgs::solve`].
-pub const DEFAULT_VELOCITY_TOLERANCE: f64 = cosim_shared::DEFAULT_PGS_TOLERANCE;
 /// Sweeps between residual evaluations (each costs O(n^2)).
 const CHECK_EVERY: usize = 4;
-
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PgsParams {
-    pub tolerance: f64,
-    pub max_iterations: usize,
-    /// Relaxation factor omega on the step `1 / W_kk`.
-    pub relaxation: f64,
-    /// Stop when no update of a sweep changes a velocity by more (m/s).
-    pub velocity_tolerance: f64,
-    /// The NNCG momentum step after each sweep.
-    pub momentum: bool,
-    /// How `velocity_tolerance` stops the iteration.
-    pub stop: Stop,
-}
-
-/// What `velocity_tolerance` bounds when PGS stops (the scene's `[sim.pgs]
-/// stop`).
-pub use cosim_shared::PgsStop as Stop;
-
-impl PgsParams {
-    /// The velocity tolerance at which PGS agrees with Lemke to 1e-6 m/s
-    /// on the reference scene and rests a stack's forces to 1e-6 of its
-    /// weight (h = 1e-3): the comparisons of the tests and the stress
-    /// suite use it. The default stops a thousand times sooner, where a
-    /// pile needs it.
-    pub fn precise() -> PgsParams {
-        PgsParams {
-            velocity_tolerance: 1e-9,
-            ..PgsParams::default()
-        }
-    }
-}
-
-impl Default for PgsParams {
-    fn default() -> Self {
-        PgsParams {
-            tolerance: DEFAULT_TOLERANCE,
-            max_iterations: DEFAULT_MAX_ITERATIONS,
-            relaxation: 1.0,
-            velocity_tolerance: DEFAULT_VELOCITY_TOLERANCE,
-            momentum: true,
-            stop: Stop::Distance,
-        }
-    }
-}
 
 /// The step's problem, as the mLCP stage built it.
 pub struct PgsProblem<'a> {

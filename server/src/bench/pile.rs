@@ -232,7 +232,7 @@ pub struct Outcome {
     /// Bodies asleep at the end.
     pub asleep: usize,
     /// Steps that projected contacts out of deep penetration
-    /// (`engine::project`): none in a pile that runs as it should.
+    /// (`engine::integrate::project`): none in a pile that runs as it should.
     pub projecting: u64,
 }
 

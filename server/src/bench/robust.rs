@@ -14,7 +14,7 @@
 
 use crate::bench::text::{joint, plane, sphere};
 use crate::engine::measure::energy;
-use crate::engine::sleep::asleep;
+use crate::engine::model::state::asleep;
 use crate::engine::{Engine, LadderCounts, Model};
 use cosim_shared::{Scene, SolverChoice};
 
@@ -470,9 +470,9 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
         for j in &m.joints {
             use crate::engine::Attachment;
             // A slider's effort is a force at B's anchor, on both sides.
-            let at = j
-                .slide
-                .map(|_| crate::engine::mlcp::anchor(j.b, &j.local_b, engine.state()).0);
+            let at = j.slide.map(|_| {
+                crate::engine::model::kinematics::anchor(j.b, &j.local_b, engine.state()).0
+            });
             for (att, sign) in [(j.a, -1.0), (j.b, 1.0)] {
                 if let Attachment::Body(i) = att {
                     let (b, s) = (&m.bodies[i], &engine.state().bodies[i]);

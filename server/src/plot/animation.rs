@@ -89,8 +89,9 @@ impl Camera {
             Vector3::new(1.0, -1.6, 0.9).normalize()
         };
         let default = {
-            let d =
-                default + world_up * 0.5 + crate::engine::contact::perpendicular(&world_up) * 0.15;
+            let d = default
+                + world_up * 0.5
+                + crate::engine::model::kinematics::perpendicular(&world_up) * 0.15;
             d.normalize()
         };
         let dir = camera
@@ -104,7 +105,7 @@ impl Camera {
             if r.norm() > 1e-9 {
                 r.normalize()
             } else {
-                crate::engine::contact::perpendicular(&forward)
+                crate::engine::model::kinematics::perpendicular(&forward)
             }
         };
         let up = right.cross(&forward);
@@ -357,7 +358,7 @@ fn floor_grid(
     let t1 = if x.norm() > 0.1 {
         x.normalize()
     } else {
-        crate::engine::contact::perpendicular(&n)
+        crate::engine::model::kinematics::perpendicular(&n)
     };
     let t2 = n.cross(&t1);
     let spacing = nice(2.0 * half / 12.0);
@@ -424,7 +425,7 @@ fn draw_frame<DB: DrawingBackend>(
     let mut patches: Vec<(f64, u8, Vec<Vector3<f64>>)> = Vec::new();
     for (k, p) in model.planes.iter().enumerate() {
         let p0 = cam.target - p.normal * (p.normal.dot(&cam.target) - p.offset);
-        let t1 = crate::engine::contact::perpendicular(&p.normal);
+        let t1 = crate::engine::model::kinematics::perpendicular(&p.normal);
         let t2 = p.normal.cross(&t1);
         let mut poly: Vec<Vector3<f64>> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
             .iter()

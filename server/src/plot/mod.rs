@@ -5,7 +5,7 @@ pub mod data;
 pub mod figures;
 pub mod gif;
 
-use crate::engine::collision::Counterpart;
+use crate::engine::model::Counterpart;
 use crate::engine::{Model, State};
 use cosim_shared::Scene;
 use data::RunData;

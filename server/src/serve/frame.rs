@@ -44,7 +44,8 @@ pub fn fill(f: &mut StateFrame, engine: &Engine, report: Option<&StepReport>, ca
     f.joint_impulses.resize(model.joints.len(), [0.0; 3]);
     f.joint_coordinates.clear();
     f.joint_coordinates.extend(model.joints.iter().map(|j| {
-        crate::engine::joint::coordinate(j, engine.state()).map_or([f64::NAN; 2], |(x, v)| [x, v])
+        crate::engine::constraint::joint::coordinate(j, engine.state())
+            .map_or([f64::NAN; 2], |(x, v)| [x, v])
     }));
     f.contacts.clear();
     let mut contacts = 0usize;

@@ -149,7 +149,7 @@ pub struct Counters {
     /// Failed steps, each counted once (the policy pauses or stops the
     /// run, so a step is tried again only after a command).
     pub failures: u64,
-    /// The solve ladder's counts, fallbacks included (`engine::fallback`).
+    /// The solve ladder's counts, fallbacks included (`engine::solver::fallback`).
     pub ladder: crate::engine::LadderCounts,
     pub controllers_joined: u64,
     /// Dropped for any reason: dead, gone, or silent for `--drop-after`

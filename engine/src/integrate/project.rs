@@ -35,14 +35,14 @@
 //! Not with a contact compliance (`[compliance.contact]`): there the
 //! penetration is the spring's deflection, which its force removes.
 
-use super::applied::InvMass;
-use super::collision::Counterpart;
-use super::contact::Contact;
-use super::model::Params;
-use super::rows::Row;
-use super::solver::pgs::{PgsParams, Stop};
-use super::solver::{Lcp, Lemke, LemkeError};
-use super::state::State;
+use crate::constraint::applied::InvMass;
+use crate::constraint::contact::Contact;
+use crate::constraint::rows::Row;
+use crate::model::state::State;
+use crate::model::Counterpart;
+use crate::model::Params;
+use crate::solver::pgs::{PgsParams, Stop};
+use crate::solver::{Lcp, Lemke, LemkeError};
 use cosim_shared::SolverChoice;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
@@ -100,7 +100,7 @@ impl Depth {
 /// a pile whose contacts all took part (2,000 of them on the 1,000 pile at
 /// a loose PGS tolerance) spent 10 s in one projection. The size at which
 /// `auto` turns to PGS for the step's LCP.
-const LEMKE_ROWS: usize = crate::AUTO_PGS_SIZE;
+const LEMKE_ROWS: usize = crate::solver::AUTO_PGS_SIZE;
 
 /// The Gauss-Seidel projection stops when no update moves a contact by
 /// more than this (m): a thousandth of the slop.
@@ -203,7 +203,7 @@ pub fn deep_penetration(
     for i in 0..state.bodies.len() {
         // A sleeping body is static for the step (zero inverse mass, so a
         // zero move), to the bit: its orientation is not normalised again.
-        if super::sleep::asleep(state, i) {
+        if crate::model::state::asleep(state, i) {
             continue;
         }
         let b = &mut state.bodies[i];

@@ -25,10 +25,10 @@
 //! large ones (Box2D and Rapier iterate every island; ODE's `dWorldStep`
 //! is the exact one: here each island gets the one that suits its size).
 
-use crate::applied::InvMass;
-use crate::island::Groups;
-use crate::mlcp::Mlcp;
-use crate::rows::Row;
+use crate::constraint::applied::InvMass;
+use crate::constraint::rows::Row;
+use crate::solver::island::Groups;
+use crate::solver::mlcp::Mlcp;
 use crate::solver::{Lcp, Lemke, LemkeError, Rung, SolveInfo};
 
 /// With `solver = "auto"` on a step too large for Lemke as a whole

@@ -20,11 +20,11 @@
 //! pruned and full runs give the same bits.
 //! The velocity check still runs after that solve.
 
-use super::collision::Counterpart;
-use super::contact::Contact;
-use super::model::Model;
-use super::rows::Row;
-use super::state::State;
+use crate::constraint::contact::Contact;
+use crate::constraint::rows::Row;
+use crate::model::state::State;
+use crate::model::Counterpart;
+use crate::model::Model;
 use nalgebra::Vector3;
 
 /// The largest speed (m/s) of body `i`'s surface that the velocities `nu`
@@ -107,7 +107,7 @@ pub const CLOSED: f64 = 1e-9;
 /// differ between the pruned and the full run. The closed set does not:
 /// `z > 0` implies `w = 0`, and the velocities, so `w`, are the same
 /// whichever vertex was answered.
-pub fn keep_active(contacts: &mut [Contact], m: &crate::mlcp::Mlcp, nu: &[f64]) -> bool {
+pub fn keep_active(contacts: &mut [Contact], m: &crate::solver::mlcp::Mlcp, nu: &[f64]) -> bool {
     let mut dropped = false;
     for (i, &ci) in m.lcp_contacts.iter().enumerate() {
         let row = m.nb + i;

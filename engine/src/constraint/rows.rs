@@ -2,10 +2,10 @@
 //! two bodies. A row's velocity is `lin . v + ang . w` summed over its bodies;
 //! the same row, transposed, maps its impulse to the bodies.
 
-use super::applied::InvMass;
-use super::collision::Counterpart;
-use super::contact::Contact;
-use super::state::State;
+use crate::constraint::applied::InvMass;
+use crate::constraint::contact::Contact;
+use crate::model::state::State;
+use crate::model::Counterpart;
 use nalgebra::Vector3;
 
 /// The part of a row on one body.

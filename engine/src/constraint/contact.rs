@@ -1,9 +1,11 @@
 //! Contact-set stage: coefficients, start-of-step normal speed and the
 //! friction basis of every potential contact.
 
-use super::collision::{Counterpart, Geometry};
-use super::model::{mix_friction, mix_restitution, Model};
-use super::state::{BodyState, State};
+use crate::collision::Geometry;
+use crate::model::kinematics::{perpendicular, point_velocity};
+use crate::model::state::State;
+use crate::model::Counterpart;
+use crate::model::{mix_friction, mix_restitution, Model};
 use nalgebra::Vector3;
 
 /// Tangential speed (m/s) above which a contact counts as sliding at the start
@@ -91,11 +93,6 @@ impl Contact {
     }
 }
 
-/// Velocity of the material point at lever arm `r` of a body.
-pub fn point_velocity(b: &BodyState, r: &Vector3<f64>) -> Vector3<f64> {
-    b.v + b.w.cross(r)
-}
-
 /// Relative velocity of A's contact point against B's.
 pub fn relative_velocity(state: &State, g: &Geometry) -> Vector3<f64> {
     let va = point_velocity(&state.bodies[g.a], &g.r_a);
@@ -104,20 +101,6 @@ pub fn relative_velocity(state: &State, g: &Geometry) -> Vector3<f64> {
         Counterpart::Body(j) => point_velocity(&state.bodies[j], &g.r_b),
     };
     va - vb
-}
-
-/// A unit vector perpendicular to `n`, chosen deterministically.
-pub fn perpendicular(n: &Vector3<f64>) -> Vector3<f64> {
-    // Cross with the axis least aligned with n: never near-parallel.
-    let a = n.abs();
-    let axis = if a.x <= a.y && a.x <= a.z {
-        Vector3::x()
-    } else if a.y <= a.z {
-        Vector3::y()
-    } else {
-        Vector3::z()
-    };
-    n.cross(&axis).normalize()
 }
 
 /// Builds the contact set from the geometry of every potential contact.

@@ -24,13 +24,13 @@
 //! The step report carries the rung, so a run counts how often each was
 //! needed.
 
-use super::applied::InvMass;
-use super::contact::Contact;
-use super::island::Groups;
-use super::mlcp::{Mlcp, Offsets};
-use super::model::Params;
-use super::solver::{Lemke, LemkeError, SolveInfo};
-use super::split::Split;
+use crate::constraint::applied::InvMass;
+use crate::constraint::contact::Contact;
+use crate::model::Params;
+use crate::solver::island::Groups;
+use crate::solver::mlcp::{Mlcp, Offsets};
+use crate::solver::split::Split;
+use crate::solver::{Lemke, LemkeError, SolveInfo};
 
 /// The compliances tried by [`Fallback::Compliant`], relative to the LCP
 /// matrix's largest entry, least first (Drake's regularised Lemke climbs a

@@ -2,8 +2,8 @@
 //! impulses and the gyroscopic term, and the free velocity they give,
 //! `nu_free = nu + M^-1 p_app` with `p_app = h (F_ext + tau - w x J w)`.
 
-use super::model::{Attachment, Model};
-use super::state::State;
+use crate::model::state::State;
+use crate::model::{Attachment, Model};
 use nalgebra::{Matrix3, Vector3};
 
 /// What the controllers (and the scene's constants) apply.
@@ -115,7 +115,7 @@ pub fn inverse_masses(model: &Model, state: &State, only: Option<&[u32]>, out: &
     }
     out.clear();
     out.extend(
-        (0..model.bodies.len()).map(|i| match crate::sleep::asleep(state, i) {
+        (0..model.bodies.len()).map(|i| match crate::model::state::asleep(state, i) {
             true => InvMass {
                 inv_m: 0.0,
                 inv_i: Matrix3::zeros(),
@@ -168,7 +168,7 @@ pub fn free_velocity(
             // not on a joint, whose efforts are added below; with its zero
             // inverse mass they would add zero).
             for i in 0..model.bodies.len() {
-                if !crate::sleep::asleep(state, i) {
+                if !crate::model::state::asleep(state, i) {
                     write(i, nu_free);
                 }
             }
@@ -180,7 +180,7 @@ pub fn free_velocity(
         // that one point (so it has no moment of its own); else a torque.
         let at = joint
             .slide
-            .map(|_| crate::mlcp::anchor(joint.b, &joint.local_b, state).0);
+            .map(|_| crate::model::kinematics::anchor(joint.b, &joint.local_b, state).0);
         for (att, sign) in [(joint.b, 1.0), (joint.a, -1.0)] {
             if let Attachment::Body(i) = att {
                 let (dv, dw) = match at {

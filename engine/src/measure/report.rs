@@ -1,10 +1,47 @@
 //! The step report: what every step says about itself.
 
-use super::fallback::Fallback;
-use super::measure::Energy;
-use super::mlcp::MlcpError;
-use super::solver::{LemkeError, Rung};
+use crate::measure::Energy;
+use crate::solver::fallback::Fallback;
+use crate::solver::mlcp::MlcpError;
+use crate::solver::{LemkeError, Rung};
+use nalgebra::Vector3;
 use std::time::Instant;
+
+/// What an impulse row of the output describes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImpulseKind {
+    Normal,
+    Friction,
+    /// A joint's anchor force impulse (N s).
+    Joint,
+    /// A hinge's, slider's or fixed joint's rotation rows' torque impulse
+    /// (N m s, a couple).
+    JointTorque,
+    /// A joint limit's impulse on A: a couple (N m s) about a hinge's
+    /// axis, a force impulse (N s) along a slider's.
+    JointLimit,
+    /// A joint motor's impulse on A, as a limit's (`motor.rs`).
+    JointMotor,
+}
+
+/// One side of an impulse: a body, a plane or the world.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Party {
+    World,
+    Body(usize),
+    Plane(usize),
+}
+
+/// The world-frame impulse on `a` over the step; `b` receives the opposite.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImpulseRecord {
+    pub kind: ImpulseKind,
+    /// Contact id (canonical index) or joint index.
+    pub index: usize,
+    pub a: Party,
+    pub b: Party,
+    pub impulse: Vector3<f64>,
+}
 
 /// Why a step failed. The state is left as it was before the step.
 #[derive(Debug, Clone, Copy, PartialEq)]

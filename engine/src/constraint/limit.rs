@@ -22,13 +22,14 @@
 //! body, so B takes it with the row negated (`Row::along(dir, None, B)`
 //! is `Row::along(-dir, B, None)`, and likewise a turning row).
 
-use crate::collision::{Counterpart, Geometry};
-use crate::contact::{Contact, Limit};
-use crate::joint::{axis, coordinate};
-use crate::mlcp::anchor;
+use crate::collision::Geometry;
+use crate::constraint::contact::{Contact, Limit};
+use crate::constraint::joint::{axis, coordinate};
+use crate::constraint::rows::Row;
+use crate::model::kinematics::anchor;
+use crate::model::state::State;
+use crate::model::Counterpart;
 use crate::model::Model;
-use crate::rows::Row;
-use crate::state::State;
 use nalgebra::Vector3;
 
 /// Appends a contact for each side of each limited joint, in joint order
@@ -75,7 +76,7 @@ pub fn limits(model: &Model, state: &State, out: &mut Vec<Contact>) {
                 },
                 mu: 0.0,
                 e: lim.restitution,
-                t1: crate::contact::perpendicular(&normal),
+                t1: crate::model::kinematics::perpendicular(&normal),
                 t2: Vector3::zeros(),
                 v_n: 0.0,
                 in_lcp: false,

@@ -1,9 +1,11 @@
 //! Measurements of a state: energy, penetration, joint error.
 
-use super::collision::{detect, Geometry, Keep, Listing, Scratch};
-use super::model::Model;
-use super::sleep;
-use super::state::State;
+pub mod report;
+
+use crate::collision::{detect, Geometry, Keep, Listing, Scratch};
+use crate::model::state;
+use crate::model::state::State;
+use crate::model::Model;
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// Energy of a state (J).
@@ -32,7 +34,7 @@ pub fn energy(model: &Model, state: &State) -> Energy {
         // A body at rest adds exactly zero to the other two (a sleeping
         // pile's step spent a tenth of its time here); a sleeping one is
         // at rest, and its tag is read faster than its velocities.
-        if sleep::asleep(state, i) || (s.v == Vector3::zeros() && s.w == Vector3::zeros()) {
+        if state::asleep(state, i) || (s.v == Vector3::zeros() && s.w == Vector3::zeros()) {
             continue;
         }
         let r = s.q.to_rotation_matrix();
@@ -69,7 +71,7 @@ impl Asleep {
     /// The sleeping bodies' poses, in body order.
     fn poses(state: &State) -> impl Iterator<Item = (Vector3<f64>, UnitQuaternion<f64>)> + '_ {
         (state.bodies.iter().enumerate())
-            .filter(|&(i, _)| sleep::asleep(state, i))
+            .filter(|&(i, _)| state::asleep(state, i))
             .map(|(_, b)| (b.x, b.q))
     }
 
@@ -96,7 +98,7 @@ impl Asleep {
             return self.depth;
         }
         self.vouched = vouched;
-        if !sleep::any_asleep(state) {
+        if !state::any_asleep(state) {
             // The key no state with a sleeping body matches.
             self.tags.clear();
             self.depth = 0.0;
@@ -160,16 +162,14 @@ pub fn max_penetration(
 
 /// Largest rotation error of the hinges, sliders and fixed joints (rad).
 pub fn max_joint_angle_error(model: &Model, state: &State) -> f64 {
-    model
-        .joints
-        .iter()
-        .fold(0.0f64, |a, j| a.max(crate::joint::angle_error(j, state)))
+    model.joints.iter().fold(0.0f64, |a, j| {
+        a.max(crate::constraint::joint::angle_error(j, state))
+    })
 }
 
 /// Largest joint error `|psi_b|` (m; a slider's off its axis).
 pub fn max_joint_error(model: &Model, state: &State) -> f64 {
-    model
-        .joints
-        .iter()
-        .fold(0.0f64, |a, j| a.max(crate::joint::anchor_error(j, state)))
+    model.joints.iter().fold(0.0f64, |a, j| {
+        a.max(crate::constraint::joint::anchor_error(j, state))
+    })
 }

@@ -45,32 +45,15 @@
 //! their own). Everything sleeping depends on is in the state (`rest`,
 //! `sleep_tag`), so a snapshot, a restore and a replay repeat its bits.
 
-use super::collision::Counterpart;
-use super::contact::{relative_velocity, Contact};
-use super::island::Islands;
-use super::model::Model;
-use super::project::{resolution, slop};
-use super::solver::pgs::PgsParams;
-use super::state::State;
+use crate::constraint::contact::{relative_velocity, Contact};
+use crate::integrate::project::{resolution, slop};
+use crate::model::islands::Islands;
+use crate::model::state::{asleep, State, AWAKE};
+use crate::model::Counterpart;
+use crate::model::Model;
+use crate::model::Sleep;
+use crate::solver::pgs::PgsParams;
 use nalgebra::Vector3;
-
-/// The scene's sleeping thresholds.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sleep {
-    /// Seconds at rest before an island sleeps.
-    pub after: f64,
-    /// Speed (m/s) and angular speed (rad/s) below which a body is at rest.
-    pub linear: f64,
-    pub angular: f64,
-}
-
-/// The tag of an awake body.
-pub const AWAKE: u32 = u32::MAX;
-
-/// Whether body `i` is asleep.
-pub fn asleep(state: &State, i: usize) -> bool {
-    state.sleep_tag.get(i).is_some_and(|&t| t != AWAKE)
-}
 
 /// The awake bodies in ascending order, listed again only when the sleep
 /// tags change, so that the passes a sleeping body has no part in walk
@@ -149,26 +132,6 @@ impl Written {
         self.0 = Some(listing);
         every
     }
-}
-
-/// Whether any body is asleep (the step's filters are skipped otherwise).
-pub fn any_asleep(state: &State) -> bool {
-    state.sleep_tag.iter().any(|&t| t != AWAKE)
-}
-
-/// How many bodies are asleep.
-pub fn count(state: &State) -> usize {
-    state.sleep_tag.iter().filter(|&&t| t != AWAKE).count()
-}
-
-/// Whether the contact of body `a` with `b` has no awake body (between two
-/// sleeping bodies, or a sleeping body and a plane): it is not listed.
-pub fn unlisted(state: &State, a: usize, b: Counterpart) -> bool {
-    asleep(state, a)
-        && match b {
-            Counterpart::Body(j) => asleep(state, j),
-            Counterpart::Plane(_) | Counterpart::World => true,
-        }
 }
 
 /// Wakes every body with tag `tag`; true when one woke.

@@ -1,7 +1,7 @@
 //! The state: small, `Clone`, complete. A snapshot is a copy of it, so
 //! rollback and bit-exact replay need nothing else.
 
-use super::model::Model;
+use super::{Counterpart, Model};
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// Pose and twist of one body; velocities in the world frame.
@@ -138,9 +138,37 @@ impl State {
             warm_lcp: Vec::new(),
             warm_active: Vec::new(),
             rest: vec![0; model.bodies.len()],
-            sleep_tag: vec![super::sleep::AWAKE; model.bodies.len()],
+            sleep_tag: vec![AWAKE; model.bodies.len()],
         }
     }
+}
+
+/// The tag of an awake body.
+pub const AWAKE: u32 = u32::MAX;
+
+/// Whether body `i` is asleep.
+pub fn asleep(state: &State, i: usize) -> bool {
+    state.sleep_tag.get(i).is_some_and(|&t| t != AWAKE)
+}
+
+/// Whether any body is asleep (the step's filters are skipped otherwise).
+pub fn any_asleep(state: &State) -> bool {
+    state.sleep_tag.iter().any(|&t| t != AWAKE)
+}
+
+/// How many bodies are asleep.
+pub fn asleep_count(state: &State) -> usize {
+    state.sleep_tag.iter().filter(|&&t| t != AWAKE).count()
+}
+
+/// Whether the contact of body `a` with `b` has no awake body (between two
+/// sleeping bodies, or a sleeping body and a plane): it is not listed.
+pub fn unlisted(state: &State, a: usize, b: Counterpart) -> bool {
+    asleep(state, a)
+        && match b {
+            Counterpart::Body(j) => asleep(state, j),
+            Counterpart::Plane(_) | Counterpart::World => true,
+        }
 }
 
 #[cfg(test)]

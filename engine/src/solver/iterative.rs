@@ -27,14 +27,14 @@
 //!    rigid answer that failed the energy check and is reported as not
 //!    converged.
 
-use super::contact::Contact;
-use super::fallback::{allowance, explained, Fallback, Step};
-use super::island::Groups;
-use super::mlcp::{Mlcp, Offsets};
-use super::solver::Lemke;
-use super::solver::{pgs, Lcp, Pgs, PgsInfo, PgsParams, PgsProblem};
-use super::split::{self, Split};
-use super::state::{State, WarmContact, WarmCursor};
+use crate::constraint::contact::Contact;
+use crate::model::state::{State, WarmContact, WarmCursor};
+use crate::solver::fallback::{allowance, explained, Fallback, Step};
+use crate::solver::island::Groups;
+use crate::solver::mlcp::{Mlcp, Offsets};
+use crate::solver::split::{self, Split};
+use crate::solver::Lemke;
+use crate::solver::{pgs, Lcp, Pgs, PgsInfo, PgsParams, PgsProblem};
 use cosim_shared::FrictionCone;
 
 /// The warm start, the offsets in use and the rigid answer, kept while a

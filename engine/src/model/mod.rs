@@ -1,8 +1,18 @@
-//! The compiled scene: immutable while the simulation runs (MuJoCo's
-//! `mjModel`). Everything that changes lives in [`State`](super::State).
+//! The bottom layer: the compiled scene, immutable while the simulation
+//! runs (MuJoCo's `mjModel`), its parameters, the [`State`] that changes
+//! (MuJoCo's `mjData`), and the few types and functions of both that every
+//! stage above shares (the islands' union-find, a joint's anchor). It
+//! imports no stage.
 
-use crate::collision::Counterpart;
-use cosim_shared::{FrictionCone, Scene, SolverChoice};
+pub mod islands;
+pub mod kinematics;
+pub mod params;
+pub mod state;
+
+pub use params::{Compliance, Params, PgsParams, Skips, Sleep, Stop};
+pub use state::{BodyState, State, WarmContact, WarmCursor};
+
+use cosim_shared::Scene;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 /// A body's shape in its own frame, centred on the centre of mass.
@@ -254,6 +264,16 @@ impl Joint {
     }
 }
 
+/// What body A of a contact touches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Counterpart {
+    Plane(usize),
+    Body(usize),
+    /// The fixed world: a joint limit's other side when the joint holds a
+    /// body to the world (`joint::limits`).
+    World,
+}
+
 /// The weld group of the world (see `Model::weld`).
 pub const WELDED_TO_WORLD: usize = usize::MAX;
 
@@ -265,7 +285,7 @@ fn weld_groups(n: usize, joints: &[Joint]) -> Vec<usize> {
         Attachment::World => n,
         Attachment::Body(i) => i,
     };
-    let mut islands = crate::island::Islands::default();
+    let mut islands = islands::Islands::default();
     islands.partition(
         n + 1,
         joints
@@ -280,128 +300,6 @@ fn weld_groups(n: usize, joints: &[Joint]) -> Vec<usize> {
             r => r,
         })
         .collect()
-}
-
-/// Time-stepping parameters.
-#[derive(Debug, Clone)]
-pub struct Params {
-    pub h: f64,
-    pub gravity: Vector3<f64>,
-    pub friction_directions: usize,
-    pub solver: SolverChoice,
-    pub friction_cone: FrictionCone,
-    pub beta: f64,
-    pub restitution_threshold: f64,
-    pub contact_margin: f64,
-    /// Keep every potential contact in the LCP (`--full`), as in the notes.
-    pub full: bool,
-    /// Sphere-sphere contacts enabled (the scene's `sphere_contacts`).
-    pub sphere_contacts: bool,
-    /// The skips, on by default; off only to measure what they save
-    /// (`bench skips`) and to test that they do not change the answer.
-    pub skips: Skips,
-    /// A pivot cap for Lemke below its own (`1000 + 50 n`): a step that
-    /// needs more fails with `pivot_limit` (and `auto` solves it with PGS),
-    /// bounding a step's time. None: Lemke's own cap.
-    pub lemke_max_pivots: Option<usize>,
-    /// Where the rigid LCP has no solution Lemke finds, fall back to the
-    /// relaxed and then the compliant formulation (`engine::fallback`),
-    /// and refuse rigid answers that add energy. Off: such a step fails
-    /// and the state stays (`serve --on-failure pause|abort`).
-    pub fallback: bool,
-    /// Springs and dampers on the contact normal rows and on the joint
-    /// rows (the scene's `[compliance]`); `None`: rigid.
-    pub contact_compliance: Option<Compliance>,
-    pub joint_compliance: Option<Compliance>,
-    pub position_update: cosim_shared::PositionUpdate,
-    /// Sleeping islands at rest (`sleep.rs`); `None`: every body steps.
-    pub sleep: Option<super::sleep::Sleep>,
-    /// The iterative solver's stopping rule (the scene's `[sim.pgs]`).
-    pub pgs: crate::solver::PgsParams,
-}
-
-/// A spring of stiffness `k` (N/m) and a damper `c` (N s/m) along a
-/// constraint row, in the step's terms.
-///
-/// Derivation. Along a row with violation `psi` (a contact's gap, negative
-/// when it penetrates; a joint's error) and end-of-step speed
-/// `v' = G^T nu'`, the implicit spring-damper gives the step's impulse
-/// `p = -h (k (psi + h v') + c v')`. Solved for `v'`:
-///
-/// ```text
-/// v' + ERP psi / h + CFM p = 0,   ERP = h k / (h k + c),
-///                                 CFM = 1 / (h (h k + c))
-/// ```
-///
-/// ODE's ERP and CFM, in physical units. So compliance is the rigid row
-/// with its stabilisation factor `beta` replaced by `ERP` and `CFM` added
-/// to its Delassus diagonal; for a contact the row stays complementary
-/// (`>= 0 _|_ p >= 0`). As `k` grows with `c / k` fixed, `ERP -> 1` and
-/// `CFM -> 0`: the rigid row with `beta = 1` (tested).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Compliance {
-    pub stiffness: f64,
-    pub damping: f64,
-}
-
-impl Compliance {
-    pub fn erp(&self, h: f64) -> f64 {
-        h * self.stiffness / (h * self.stiffness + self.damping)
-    }
-
-    pub fn cfm(&self, h: f64) -> f64 {
-        1.0 / (h * (h * self.stiffness + self.damping))
-    }
-}
-
-impl From<cosim_shared::scene::SpringDesc> for Compliance {
-    fn from(s: cosim_shared::scene::SpringDesc) -> Compliance {
-        Compliance {
-            stiffness: s.stiffness,
-            damping: s.damping,
-        }
-    }
-}
-
-impl Params {
-    /// Whether the broad phase lists the contacts (`collision::Listing`),
-    /// else every potential contact is listed, as in the notes.
-    pub fn broad_phase(&self) -> bool {
-        !self.full && self.skips.broad_phase
-    }
-}
-
-/// Work a step leaves out when the scene does not need it. Pruning is
-/// `Params::full`; the joint block is absent without joints by
-/// construction.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Skips {
-    /// No friction rows (nor slack) for contacts with mu = 0.
-    pub frictionless_rows: bool,
-    /// PGS starts from the last step's impulses (by contact identity).
-    pub warm_start: bool,
-    /// Lemke first tries the last step's support, carried over by contact
-    /// identity ([`Lemke::solve_guess`](super::solver::Lemke::solve_guess)).
-    pub lemke_guess: bool,
-    /// The broad phase lists only the sphere pairs within reach
-    /// (`collision/broad.rs`) instead of every pair.
-    pub broad_phase: bool,
-    /// A step of a world asleep whole, with no input, advances the clock
-    /// alone (`Engine::idle_step`), instead of running every stage on
-    /// nothing.
-    pub idle: bool,
-}
-
-impl Default for Skips {
-    fn default() -> Self {
-        Skips {
-            frictionless_rows: true,
-            warm_start: true,
-            lemke_guess: true,
-            broad_phase: true,
-            idle: true,
-        }
-    }
 }
 
 /// Initial pose and twist of a body, world frame.
@@ -549,7 +447,7 @@ impl Model {
                 let turning = match j.kind {
                     K::Spherical => Turning::Free,
                     K::Revolute => {
-                        let zero = crate::contact::perpendicular(&axis);
+                        let zero = kinematics::perpendicular(&axis);
                         Turning::Axis {
                             a: turned(a).inverse_transform_vector(&axis),
                             b: turned(b).inverse_transform_vector(&axis),
@@ -640,18 +538,16 @@ impl Model {
                     .map(Compliance::from),
                 joint_compliance: scene.compliance.and_then(|c| c.joint).map(Compliance::from),
                 position_update: s.position_update,
-                sleep: s.sleep.map(|d| super::sleep::Sleep {
+                sleep: s.sleep.map(|d| Sleep {
                     after: d.after,
                     linear: d.linear_speed,
                     angular: d.angular_speed,
                 }),
-                pgs: s.pgs.map_or_else(crate::solver::PgsParams::default, |d| {
-                    crate::solver::PgsParams {
-                        velocity_tolerance: d.tolerance,
-                        max_iterations: d.max_iterations,
-                        stop: d.stop,
-                        ..Default::default()
-                    }
+                pgs: s.pgs.map_or_else(PgsParams::default, |d| PgsParams {
+                    velocity_tolerance: d.tolerance,
+                    max_iterations: d.max_iterations,
+                    stop: d.stop,
+                    ..Default::default()
                 }),
             },
             initial,

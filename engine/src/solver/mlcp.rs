@@ -47,11 +47,11 @@
 //! contacts and two joints: 78 instead of 300 row couplings, which were
 //! 37 % of a resting reference step under perf).
 
-use super::applied::InvMass;
-use super::contact::Contact;
-use super::model::{Attachment, Model, Params};
-use super::rows::Row;
-use super::state::{State, WarmContact};
+use crate::constraint::applied::InvMass;
+use crate::constraint::contact::Contact;
+use crate::constraint::rows::Row;
+use crate::model::state::{State, WarmContact};
+use crate::model::{Model, Params};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::{
     cholesky_in_place, cholesky_in_place_scratch, LltRegularization,
@@ -154,22 +154,6 @@ impl std::fmt::Display for MlcpError {
                 f,
                 "singular joint block: pivot {pivot:.3e} at joint row {row} (redundant joints or a closed loop)"
             ),
-        }
-    }
-}
-
-/// World position of a joint's anchor on one side, and its lever arm.
-pub fn anchor(
-    att: Attachment,
-    local: &Vector3<f64>,
-    state: &State,
-) -> (Vector3<f64>, Option<(usize, Vector3<f64>)>) {
-    match att {
-        Attachment::World => (*local, None),
-        Attachment::Body(i) => {
-            let b = &state.bodies[i];
-            let r = b.q.transform_vector(local);
-            (b.x + r, Some((i, r)))
         }
     }
 }
@@ -495,7 +479,7 @@ impl Mlcp {
         if self.dirs.len() != nd {
             self.dirs.clear();
             self.dirs
-                .extend((0..nd).map(|j| super::contact::direction_coefficients(j, nd)));
+                .extend((0..nd).map(|j| crate::constraint::contact::direction_coefficients(j, nd)));
         }
         self.rows.clear();
         self.basis.clear();
@@ -508,7 +492,14 @@ impl Mlcp {
         // a fixed joint holds.
         let factor = p.joint_compliance.map_or(p.beta, |k| k.erp(p.h));
         for joint in &model.joints {
-            crate::joint::push_rows(joint, state, factor, p.h, &mut self.rows, &mut self.offset);
+            crate::constraint::joint::push_rows(
+                joint,
+                state,
+                factor,
+                p.h,
+                &mut self.rows,
+                &mut self.offset,
+            );
         }
         self.nb = self.rows.len();
 
@@ -545,13 +536,15 @@ impl Mlcp {
         self.motor_axis.clear();
         for &j in &model.motors {
             let joint = &model.joints[j];
-            let (Some(row), Some(motor)) = (crate::motor::rate_row(joint, state), joint.motor)
-            else {
+            let (Some(row), Some(motor)) = (
+                crate::constraint::motor::rate_row(joint, state),
+                joint.motor,
+            ) else {
                 unreachable!("the scene gives motors to hinges and sliders only")
             };
             self.basis.push(row);
             self.motor_axis
-                .push(crate::joint::axis(joint, state).unwrap_or_else(Vector3::zeros));
+                .push(crate::constraint::joint::axis(joint, state).unwrap_or_else(Vector3::zeros));
             self.motor_row.push(model.joint_start[j]);
             self.motor_cap.push(motor.max_effort * p.h);
         }
@@ -1023,7 +1016,7 @@ impl Mlcp {
     /// physics, and `engine::fallback` refuses it.
     pub fn stabilisation_budget(&self, p: &Params, minv: &[InvMass]) -> f64 {
         let nb = self.nb;
-        let row = |k: usize, spring: Option<super::model::Compliance>| {
+        let row = |k: usize, spring: Option<crate::model::Compliance>| {
             let v = self.offset[k];
             let d = self.rows[k].coupling(&self.rows[k], minv) + self.cfm[k];
             let kinetic = if d > 0.0 { 0.5 * v * v / d } else { 0.0 };

@@ -31,10 +31,10 @@
 //! same). Without it the rows would miss `w_A . (n x psi)`, which grows
 //! with the slide's travel.
 
-use crate::mlcp::anchor;
+use crate::constraint::rows::Row;
+use crate::model::kinematics::anchor;
+use crate::model::state::State;
 use crate::model::{Attachment, Joint, Turning};
-use crate::rows::Row;
-use crate::state::State;
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// A side's orientation (the world's: the identity).
@@ -65,7 +65,7 @@ pub fn body(att: Attachment) -> Option<usize> {
 
 /// Two unit directions normal to unit `u` and to each other.
 fn normals(u: &Vector3<f64>) -> [Vector3<f64>; 2] {
-    let t1 = crate::contact::perpendicular(u);
+    let t1 = crate::model::kinematics::perpendicular(u);
     [t1, u.cross(&t1)]
 }
 
@@ -185,7 +185,7 @@ pub fn coordinate(joint: &Joint, state: &State) -> Option<(f64, f64)> {
     let spin = |att: Attachment| body(att).map_or_else(Vector3::zeros, |i| state.bodies[i].w);
     let point = |r: Option<(usize, Vector3<f64>)>| {
         r.map_or_else(Vector3::zeros, |(i, r)| {
-            crate::contact::point_velocity(&state.bodies[i], &r)
+            crate::model::kinematics::point_velocity(&state.bodies[i], &r)
         })
     };
     let (wa, wb) = (spin(joint.a), spin(joint.b));

@@ -16,11 +16,11 @@
 //! in the LCP's `q`, so the matrix stays the one `prepare` made before
 //! the inputs, whatever speed a controller sets.
 
-use crate::joint::{axis, body};
-use crate::mlcp::anchor;
+use crate::constraint::joint::{axis, body};
+use crate::constraint::rows::Row;
+use crate::model::kinematics::anchor;
+use crate::model::state::State;
 use crate::model::Joint;
-use crate::rows::Row;
-use crate::state::State;
 use nalgebra::Vector3;
 
 /// The row whose velocity is the coordinate's rate `x'`

@@ -19,7 +19,9 @@
 //! keeps `x' = x + h v'`: averaging across a velocity jump would carry it
 //! half a step into the surface it hit.
 
-use super::state::State;
+pub mod project;
+
+use crate::model::state::State;
 use cosim_shared::PositionUpdate;
 use nalgebra::{UnitQuaternion, Vector3};
 

@@ -1,0 +1,12 @@
+//! Constraint rows: what the solve stage's problem is made of. A contact's
+//! normal and friction directions, a joint's rows, a limit as a contact, a
+//! motor's bounded row, each as a [`rows::Row`] on at most two bodies; and
+//! the applied impulses (inputs, gravity, forces) that give the free
+//! velocity.
+
+pub mod applied;
+pub mod contact;
+pub mod joint;
+pub mod limit;
+pub mod motor;
+pub mod rows;
