@@ -28,9 +28,9 @@ mod testing;
 
 pub use constraint::applied::{InputError, Inputs};
 pub use measure::report::{
-    ImpulseKind, ImpulseRecord, LadderCounts, Lap, Party, StepError, StepReport, Timings,
+    ImpulseKind, ImpulseRecord, LadderCounts, Lap, StepError, StepReport, Timings,
 };
-pub use model::{Attachment, Model, Skips, Turning};
+pub use model::{Attachment, Model, Party, Skips, Turning};
 pub use model::{BodyState, State, WarmContact};
 pub use solver::fallback::Fallback;
 pub use solver::AUTO_PGS_SIZE;

@@ -5,7 +5,7 @@
 //! start as in a real run.
 
 use cosim_server::engine::{Engine, Model};
-use cosim_server::scenes;
+use cosim_shared::scenes;
 use cosim_shared::SolverChoice;
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;

@@ -3,22 +3,12 @@
 //! writers are flushed regularly, so a run that stops early leaves readable
 //! files.
 
-use crate::engine::{Engine, ImpulseKind, Model, Party, StepReport};
+use crate::engine::{Engine, ImpulseKind, StepReport};
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// A float as the shortest text that reads back to the same bits, in plain
-/// notation where that stays short and in scientific notation otherwise.
-pub fn num(x: f64) -> String {
-    let a = x.abs();
-    if x == 0.0 || (1e-4..1e15).contains(&a) || !x.is_finite() {
-        format!("{x}")
-    } else {
-        format!("{x:e}")
-    }
-}
-
+pub use cosim_shared::num;
 pub use cosim_shared::{IMPULSES_HEADER, JOINTS_HEADER, STATES_HEADER};
 pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw,projected,rung,refined,fallback,compliance,energy_refused,islands,largest_island,sleeping,lemke_islands,pgs_islands,max_joint_angle_error,left_out";
 
@@ -40,14 +30,6 @@ fn create(dir: &Path, name: &str, header: &str) -> io::Result<BufWriter<File>> {
         })?);
     writeln!(w, "{header}")?;
     Ok(w)
-}
-
-fn party_name(model: &Model, p: Party) -> &str {
-    match p {
-        Party::World => cosim_shared::scene::WORLD,
-        Party::Body(i) => &model.bodies[i].name,
-        Party::Plane(i) => &model.planes[i].name,
-    }
 }
 
 impl Writers {
@@ -126,16 +108,16 @@ impl Writers {
                 ImpulseKind::JointTorque => ("joint_torque", model.joints[r.index].name.clone()),
                 ImpulseKind::JointLimit => ("joint_limit", model.joints[r.index].name.clone()),
                 ImpulseKind::JointMotor => ("joint_motor", model.joints[r.index].name.clone()),
-                ImpulseKind::Normal => ("normal", contact_name(model, r.index, r.a, r.b)),
-                ImpulseKind::Friction => ("friction", contact_name(model, r.index, r.a, r.b)),
+                ImpulseKind::Normal => ("normal", model.contact_name(r.index, r.a, r.b)),
+                ImpulseKind::Friction => ("friction", model.contact_name(r.index, r.a, r.b)),
             };
             let _ = writeln!(
                 self.line,
                 "{},{},{kind},{name},{},{},{},{},{}",
                 s.step,
                 num(s.t),
-                party_name(model, r.a),
-                party_name(model, r.b),
+                model.party_name(r.a),
+                model.party_name(r.b),
                 num(r.impulse.x),
                 num(r.impulse.y),
                 num(r.impulse.z)
@@ -204,16 +186,6 @@ impl Writers {
     }
 }
 
-/// Contact `id`'s name: `a/b`, e.g. `upper/floor`, and `a/b#k` for a
-/// pair's contact `k > 0` (`cosim_shared::contact_label`).
-pub fn contact_name(model: &Model, id: usize, a: Party, b: Party) -> String {
-    cosim_shared::contact_label(
-        party_name(model, a),
-        party_name(model, b),
-        model.contact_feature(id),
-    )
-}
-
 /// The ladder's counts as `summary.json` holds them: steps by the highest
 /// rung of Lemke's ladder they needed, refined answers, and the steps that
 /// fell back to another formulation (see `engine::solver::fallback`).
@@ -231,24 +203,4 @@ pub fn ladder_json(c: &crate::engine::LadderCounts) -> serde_json::Value {
         "max_compliance": c.max_compliance,
         "energy_refused": c.energy_refused,
     })
-}
-
-/// The ladder's counts on one line of a run summary.
-pub fn ladder_line(c: &crate::engine::LadderCounts) -> String {
-    use crate::engine::solver::Rung;
-    let rungs: Vec<String> = Rung::LADDER
-        .iter()
-        .zip(c.rungs)
-        .filter(|(_, n)| *n > 0)
-        .map(|(r, n)| format!("{} {n}", r.as_str()))
-        .collect();
-    format!(
-        "{}; refined {}; fell back: relaxed {}, compliant {} (largest eps {:.1e}), energy-refused {}",
-        if rungs.is_empty() { "no Lemke solve".to_string() } else { rungs.join(", ") },
-        c.refined,
-        c.relaxed,
-        c.compliant,
-        c.max_compliance,
-        c.energy_refused
-    )
 }

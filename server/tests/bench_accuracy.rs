@@ -118,8 +118,8 @@ fn quick_sweep_writes_csv_and_diagrams_with_the_expected_errors() {
     // continuous answer); the trapezoid update leaves only the last
     // step's part (below a h^2); no pitch, no sink.
     for h in [1e-2, 1e-3] {
-        let discrete = cosim_server::bench::cases::incline_discrete_distance(h);
-        let exact = cosim_server::bench::cases::incline_stop_distance();
+        let discrete = cosim_bench::cases::incline_discrete_distance(h);
+        let exact = cosim_bench::cases::incline_stop_distance();
         for s in ["lemke nd=8", "pgs tol=1e-6"] {
             let (e8, m8) = get("S8", s, h);
             let d = metric(&m8, "distance_m");
@@ -132,7 +132,7 @@ fn quick_sweep_writes_csv_and_diagrams_with_the_expected_errors() {
             assert!(metric(&m8, "sink_m") < 1e-7, "S8 {s}: {m8}");
         }
         let (e8, _) = get("S8", "lemke nd=8 trapezoid", h);
-        let a = cosim_server::bench::cases::incline_deceleration();
+        let a = cosim_bench::cases::incline_deceleration();
         assert!(e8 < a * h * h, "S8 trapezoid at h = {h}: {e8}");
     }
     for case in ["S1", "S2", "S3", "S4", "S6", "S7", "S8", "REF"] {

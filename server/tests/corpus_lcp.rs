@@ -229,7 +229,7 @@ fn written_lcps_read_back_to_the_bit() {
         .iter()
         .map(|n| load(n))
         .collect();
-    let scene = cosim_server::scenes::reference().expect("built-in scene");
+    let scene = cosim_shared::scenes::reference().expect("built-in scene");
     let mut e = Engine::new(Model::from_scene(&scene));
     for _ in 0..1500 {
         e.step();

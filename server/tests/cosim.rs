@@ -138,7 +138,7 @@ fn serve_test(test: &str, extra: &[&str]) -> (ServerProc, TempDir, String) {
 /// where it gives one.
 fn offline(steps: u64, torque: impl Fn(u64) -> Option<[f64; 3]>) -> Vec<(u64, [f64; 3])> {
     use cosim_server::engine::{Engine, Model};
-    let scene = cosim_server::scenes::reference().unwrap();
+    let scene = cosim_shared::scenes::reference().unwrap();
     let mut e = Engine::new(Model::from_scene(&scene));
     let mut rows = vec![(0, e.state().bodies[0].x.into())];
     for k in 0..steps {
@@ -597,9 +597,9 @@ fn a_recording_matches_the_servers_own_files_and_plots() {
     assert!(served.len() > 2 * 400, "{} rows", served.len());
     assert_eq!(served, recorded, "the recording's joints.csv");
     recorded_mcap_reads_back(rec.path(), theirs.len());
-    let figures = cosim_server::plot::render(
+    let figures = cosim_figures::render(
         rec.path(),
-        &cosim_server::plot::PlotOptions {
+        &cosim_figures::PlotOptions {
             figures: true,
             ..Default::default()
         },
@@ -1075,7 +1075,7 @@ fn spinning_server_and_controller_skip_the_events_and_stay_in_lockstep() {
 /// stabilisation asks it to leave both walls, and friction at each wall
 /// locks the motion out of the other. The rigid LCP has no solution.
 fn locked_corner() -> String {
-    use cosim_server::bench::text::{plane, sphere};
+    use cosim_bench::text::{plane, sphere};
     let mut s = "[sim]\nname = \"locked_corner\"\ndt = 0.001\nsteps = 50\n\
                  gravity = [0.0, 0.0, -9.81]\nfriction_directions = 8\nsolver = \"lemke\"\n"
         .to_string();
@@ -1660,7 +1660,8 @@ fn a_scene_larger_than_the_response_buffer_streams_whole() {
 /// run replays bit for bit.
 #[test]
 fn random_requests_and_inputs_leave_the_server_running() {
-    use cosim_server::bench::{fuzz, robust::Rng};
+    use cosim_bench::robust::Rng;
+    use cosim_server::fuzz;
     use cosim_shared::wire::{ControlRequest, ControlResponse};
     use iceoryx2::prelude::*;
     // A short deadline and no drop: a random reset or restore can bring
@@ -1890,7 +1891,7 @@ fn a_four_thousand_sphere_pile_is_served_in_lockstep() {
     const STEPS: u64 = 12;
     let dir = TempDir::new("pile4000");
     let scene = dir.path().join("pile.toml");
-    let text = cosim_server::bench::pile::text(N, 0.01, 4, "pgs", STEPS, 1);
+    let text = cosim_bench::pile::text(N, 0.01, 4, "pgs", STEPS, 1);
     std::fs::write(&scene, &text).unwrap();
     let name = unique("pile4000");
     let out = dir.path().join("run");

@@ -2,8 +2,8 @@
 //! target (`cosim-server bench fuzz` runs long ones), and the defects the
 //! fuzzer found, kept as regressions.
 
-use cosim_server::bench::fuzz;
 use cosim_server::engine::{Engine, Model};
+use cosim_server::fuzz;
 use nalgebra::Vector3;
 
 #[test]
@@ -32,7 +32,7 @@ fn random_input_frames_are_checked_and_no_taken_one_breaks_a_step() {
 /// now fails with the state as it was.
 #[test]
 fn an_overflowing_input_fails_the_step_and_keeps_the_state() {
-    let scene = cosim_server::scenes::reference().unwrap();
+    let scene = cosim_shared::scenes::reference().unwrap();
     let mut e = Engine::new(Model::from_scene(&scene));
     for _ in 0..10 {
         assert!(e.step().ok());

@@ -2,9 +2,9 @@
 //! the embedded font, the GIF has the expected frames and follows the
 //! trajectory, and drawing is deterministic.
 
+use cosim_figures::animation::{frames, marker, Camera};
+use cosim_figures::{color, data::RunData};
 use cosim_server::engine::Model;
-use cosim_server::plot::animation::{frames, marker, Camera};
-use cosim_server::plot::{color, data::RunData};
 use cosim_shared::Scene;
 use image::AnimationDecoder;
 mod common;
@@ -19,7 +19,7 @@ const BIN: &str = env!("CARGO_BIN_EXE_cosim-server");
 /// so all of them but the hinges' and sliders' coordinates (it has
 /// neither: `slider.toml` draws that one, below).
 fn figures() -> Vec<&'static str> {
-    let all = cosim_server::plot::figures::STEMS;
+    let all = cosim_figures::figures::STEMS;
     all.into_iter()
         .filter(|&f| f != "joint_coordinates")
         .collect()
@@ -182,7 +182,7 @@ fn plotting_a_folder_without_a_run_exits_2() {
 }
 
 /// The pixels of `png` within `tol` of colour `c` in every channel.
-fn pixels_of(png: &image::RgbImage, c: plotters::style::RGBColor, tol: i32) -> Vec<(u32, u32)> {
+fn pixels_of(png: &image::RgbImage, c: cosim_figures::RGBColor, tol: i32) -> Vec<(u32, u32)> {
     png.enumerate_pixels()
         .filter(|(_, _, p)| {
             (p.0[0] as i32 - c.0 as i32).abs() <= tol
@@ -229,7 +229,7 @@ fn components(pixels: &[(u32, u32)]) -> Vec<Vec<(u32, u32)>> {
 /// tick labels, and spans the time axis.
 #[test]
 fn a_known_series_is_drawn_where_it_must_be_and_nowhere_else() {
-    use cosim_server::plot::figures::{figure, Frame, Panel, Series};
+    use cosim_figures::figures::{figure, Frame, Panel, Series};
     let tmp = TempDir::new("plots-pixels");
     // A baseline at 0, a one-sample spike to 10 at t = 1.5, a step to 1
     // at t = 1.8 (the shape of an impact on a resting contact).
@@ -371,7 +371,7 @@ fn figures_leave_out_empty_groups_and_mark_a_failure() {
     let png = image::open(out.join("plots/positions.png"))
         .unwrap()
         .to_rgb8();
-    let red = pixels_of(&png, plotters::style::RGBColor(200, 0, 0), 10);
+    let red = pixels_of(&png, cosim_figures::RGBColor(200, 0, 0), 10);
     // A marker line down each of the three panels.
     assert!(red.len() > 3 * 200, "{} marker pixels", red.len());
 }

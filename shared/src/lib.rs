@@ -3,8 +3,21 @@
 //! contract (service names and wire types, see `docs/protocol.md`).
 
 pub mod scene;
+pub mod scenes;
 #[cfg(feature = "wire")]
 pub mod wire;
+
+/// A float as the shortest text that reads back to the same bits, in plain
+/// notation where that stays short and in scientific notation otherwise:
+/// every number of a run's CSV files.
+pub fn num(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || (1e-4..1e15).contains(&a) || !x.is_finite() {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
 
 /// Header of `states.csv`, written by `run`, `serve` and `cosim record`.
 pub const STATES_HEADER: &str = "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz";

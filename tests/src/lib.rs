@@ -38,7 +38,7 @@ pub fn sim(dt: f64, steps: u64, gravity: [f64; 3]) -> String {
 
 /// Scene text: `[[body]]` spheres, `[[plane]]`s, spherical `[[joint]]`s
 /// (the benchmarks' helpers).
-pub use cosim_server::bench::text::{capsule, cuboid, joint, plane, sphere};
+pub use cosim_bench::text::{capsule, cuboid, joint, plane, sphere};
 
 /// A `[[joint]]` of any type, with its axis where it has one.
 pub fn joint_of(

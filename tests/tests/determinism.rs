@@ -2,7 +2,7 @@
 //! snapshot is restored (the state is complete).
 
 use cosim_server::engine::{Engine, Model};
-use cosim_server::scenes;
+use cosim_shared::scenes;
 
 #[test]
 fn restoring_a_snapshot_replays_the_same_bits() {
@@ -124,7 +124,7 @@ fn the_matrix_made_before_the_inputs_changes_no_bit() {
 #[test]
 fn a_state_holds_memory_in_proportion_to_its_bodies() {
     for n in [100usize, 1000] {
-        let scene = cosim_server::bench::pile::scene(n, 0.01, 4, "pgs", 10, 1);
+        let scene = cosim_bench::pile::scene(n, 0.01, 4, "pgs", 10, 1);
         let mut e = Engine::new(Model::from_scene(&scene));
         let first = e.state().heap_bytes();
         // A few steps: the spheres fall, the bottom layer lands later.

@@ -4,7 +4,7 @@
 //! 20 steps: no failed step, no PGS fallback where Lemke was asked for, and
 //! the energy and speed bounds of `bench::robust::check`.
 
-use cosim_server::bench::robust;
+use cosim_bench::robust;
 use cosim_server::engine::{Engine, LadderCounts, Model, Turning};
 use cosim_shared::{Scene, SolverChoice};
 use cosim_tests::shipped_scene;
@@ -80,7 +80,7 @@ fn every_shipped_scene_runs_ten_times_its_duration_with_each_solver() {
             eprintln!(
                 "{name} x10 ({steps} steps), {}: {}",
                 solver.as_str(),
-                cosim_server::output::ladder_line(&ladder)
+                ladder
             );
         }
     }
@@ -97,10 +97,7 @@ fn the_reference_scene_runs_a_million_steps_with_lemke_alone() {
         SolverChoice::Lemke,
         1_000_000,
     );
-    eprintln!(
-        "reference, 10^6 steps: {}",
-        cosim_server::output::ladder_line(&ladder)
-    );
+    eprintln!("reference, 10^6 steps: {}", ladder);
     assert_eq!(ladder.fell_back(), 0, "{ladder:?}");
     assert!(
         ladder.rungs[2] > 0,

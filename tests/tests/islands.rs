@@ -3,7 +3,7 @@
 //! a jointed pair in flight and a free sphere: three islands, the largest
 //! of two bodies; a sphere in the groove of two ties the three.
 
-use cosim_server::bench::text::{joint, plane, sphere};
+use cosim_bench::text::{joint, plane, sphere};
 use cosim_server::engine::{Engine, Model};
 
 #[test]
@@ -51,7 +51,7 @@ fn the_step_reports_its_islands() {
 /// Island A: a sphere sliding on the floor, a stack of two, and a sphere
 /// in the groove of two; each body placed at `dx` along x.
 fn island_a(dx: f64) -> String {
-    use cosim_server::bench::text::sphere;
+    use cosim_bench::text::sphere;
     let r = 0.1;
     let z = r + 3f64.sqrt() * r;
     [
@@ -69,7 +69,7 @@ fn island_a(dx: f64) -> String {
 /// spheres on the floor and `(side - 1)^2` in their hollows, each on four:
 /// the top layer's weight ties every sphere into one island.
 fn island_b(side: usize) -> String {
-    use cosim_server::bench::text::sphere;
+    use cosim_bench::text::sphere;
     let r = 0.05;
     let d = 2.0 * r;
     let mut text = String::new();

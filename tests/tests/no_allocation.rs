@@ -4,7 +4,7 @@
 //! in parallel, and one's warm-up must not count in another's step.
 
 use cosim_server::engine::{Engine, ImpulseKind, Model};
-use cosim_server::scenes;
+use cosim_shared::scenes;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -127,7 +127,7 @@ fn hinges_sliders_and_fixed_joints_allocate_nothing_after_warm_up() {
 /// allocates nothing, with the broad phase and without it.
 #[test]
 fn the_broad_phase_allocates_nothing_after_warm_up() {
-    let scene = cosim_server::bench::skips::gas().expect("the gas scene");
+    let scene = cosim_bench::skips::gas().expect("the gas scene");
     for broad in [true, false] {
         let mut model = Model::from_scene(&scene);
         model.params.skips.broad_phase = broad;
@@ -145,7 +145,7 @@ fn the_broad_phase_allocates_nothing_after_warm_up() {
 /// second pass allocates nothing.
 #[test]
 fn sleeping_and_waking_allocate_nothing_after_warm_up() {
-    use cosim_server::bench::text::{plane, sphere};
+    use cosim_bench::text::{plane, sphere};
     let r = 0.1;
     let text = format!(
         "[sim]\nname = \"sleep\"\ndt = 0.001\nsteps = 10\nsolver = \"lemke\"\n\n[sim.sleep]\nafter = 0.1\n\n{}{}{}{}",
@@ -173,7 +173,7 @@ fn sleeping_and_waking_allocate_nothing_after_warm_up() {
 /// pass over the same 300 steps allocates nothing.
 #[test]
 fn a_pile_split_between_lemke_and_pgs_allocates_nothing_after_warm_up() {
-    use cosim_server::bench::pile;
+    use cosim_bench::pile;
     let scene = pile::scene(100, 0.01, 4, "auto", 300, 1);
     let mut model = Model::from_scene(&scene);
     model.params.pgs = pile::pgs(pile::TOLERANCE);

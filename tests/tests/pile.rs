@@ -4,7 +4,7 @@
 //! safety net, and the accuracy stays ours: overlaps far below a
 //! millimetre, nothing leaves the box, the pile comes to rest.
 
-use cosim_server::bench::pile::{self, Settings, Shape};
+use cosim_bench::pile::{self, Settings, Shape};
 
 /// 500 steps of 10 ms, `auto`, the pile's rule at `tolerance` (m/s).
 fn settings(tolerance: f64) -> Settings {
@@ -140,7 +140,7 @@ fn a_steps_sweeps_stay_within_the_cap_over_its_re_solves() {
 /// stabilisation), none pushed sideways, none launched.
 #[test]
 fn a_large_overlapping_layer_is_projected_out_without_lemke() {
-    use cosim_server::bench::text::{plane, sphere};
+    use cosim_bench::text::{plane, sphere};
     use cosim_server::engine::{Engine, Model};
     let (r, side) = (0.05, 26);
     let mut text = "[sim]\nname = \"layer\"\ndt = 0.01\nsteps = 10\nsolver = \"auto\"\nfriction_directions = 4\n\n".to_string();

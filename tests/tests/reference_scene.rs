@@ -2,7 +2,7 @@
 //! unknowns, pruned and full runs agree, Lemke solves every step of 10 s.
 
 use cosim_server::engine::{Engine, Model};
-use cosim_server::scenes;
+use cosim_shared::scenes;
 
 /// Runs the reference scene for 10 s; returns every state (flattened) and
 /// the number of regularised solves.

@@ -5,7 +5,7 @@
 //! support guess, PGS warm start,
 //! each on and off on the same scene (`cosim-server bench skips` times them).
 
-use cosim_server::bench::skips;
+use cosim_bench::skips;
 
 #[test]
 fn skips_do_not_change_the_trajectory() {
@@ -78,7 +78,7 @@ fn skips_do_not_change_the_trajectory() {
 /// pairs, to the bit.
 #[test]
 fn the_broad_phase_widens_for_fast_free_and_new_speeds() {
-    use cosim_server::bench::text::sphere;
+    use cosim_bench::text::sphere;
     use cosim_server::engine::{Engine, Model};
     use nalgebra::Vector3;
     let text = format!(
@@ -121,7 +121,7 @@ fn the_broad_phase_widens_for_fast_free_and_new_speeds() {
 /// within their 20 steps.
 #[test]
 fn the_measurement_s_listing_serves_the_next_step_and_no_other() {
-    use cosim_server::bench::robust;
+    use cosim_bench::robust;
     use cosim_server::engine::model::state;
     use cosim_server::engine::{measure, Engine, Model};
     use nalgebra::Vector3;

@@ -3,7 +3,7 @@
 //! that comes into contact, wakes it in the same step; a run restored from
 //! a snapshot repeats the original's bits through sleeping and waking.
 
-use cosim_server::bench::text::{plane, sphere};
+use cosim_bench::text::{plane, sphere};
 use cosim_server::engine::{BodyState, Engine, Model};
 use nalgebra::Vector3;
 
@@ -172,9 +172,7 @@ fn contact_ids_name_their_bodies_back() {
     // Every pair of a 3,001-sphere pile with five planes, at its first
     // and last feature: the closed-form inverse's rounding is corrected
     // at every row boundary.
-    let m = Model::from_scene(&cosim_server::bench::pile::scene(
-        3001, 0.01, 4, "auto", 1, 1,
-    ));
+    let m = Model::from_scene(&cosim_bench::pile::scene(3001, 0.01, 4, "auto", 1, 1));
     let (n, last) = (m.bodies.len(), m.features - 1);
     for a in 0..n {
         let planes = (0..m.planes.len()).map(Counterpart::Plane);
@@ -227,7 +225,7 @@ fn a_sleeping_island_keeps_its_warm_start() {
 /// The `n`-sphere pile of `bench pile` (a cube), 1,000 steps, `auto`,
 /// sleeping at the scene's default thresholds.
 fn sleeping_pile(n: usize) -> String {
-    use cosim_server::bench::pile;
+    use cosim_bench::pile;
     pile::text_shaped(
         n,
         pile::Shape::Cube,
@@ -245,7 +243,7 @@ fn sleeping_pile(n: usize) -> String {
 /// changes; every sphere asleep in the box, not in the air (at rest
 /// within a tenth of a millimetre of overlap).
 fn falls_asleep_whole_and_stays(n: usize, still: usize) {
-    use cosim_server::bench::pile;
+    use cosim_bench::pile;
     let scene = cosim_shared::Scene::parse(&sleeping_pile(n), "<pile>").unwrap();
     let mut e = Engine::new(Model::from_scene(&scene));
     let slept = run_until_asleep(&mut e, n);
@@ -483,7 +481,7 @@ fn a_world_asleep_whole_steps_idle_with_the_full_steps_bits() {
 /// asleep beside awake ones.
 #[test]
 fn what_the_awake_passes_keep_for_sleeping_bodies_is_what_a_full_pass_writes() {
-    use cosim_server::bench::robust;
+    use cosim_bench::robust;
     use cosim_server::engine::model::state;
     use cosim_server::engine::StepReport;
     // A step of `straight`, pushed on body `push` if any, and the same

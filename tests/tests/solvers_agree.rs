@@ -2,7 +2,7 @@
 //! the same velocities where PGS converged.
 
 use cosim_server::engine::{Engine, Model};
-use cosim_server::scenes;
+use cosim_shared::scenes;
 use cosim_shared::SolverChoice;
 
 #[test]

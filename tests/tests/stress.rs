@@ -3,7 +3,7 @@
 //! holds the whole table, failures included (PGS at mass ratios >= 1e3,
 //! Lemke alone on the 10^6-step run).
 
-use cosim_server::bench::stress::{self, Outcome};
+use cosim_bench::stress::{self, Outcome};
 use cosim_shared::SolverChoice::{self, Auto, Lemke, Pgs};
 
 fn check(o: Outcome) {

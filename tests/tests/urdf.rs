@@ -14,7 +14,7 @@ fn arm_text() -> String {
 }
 
 fn import(text: &str) -> Result<Scene, cosim_shared::SceneError> {
-    cosim_server::urdf::scene(text, "robot.urdf", "robot")
+    cosim_import::urdf::scene(text, "robot.urdf", "robot")
 }
 
 /// The arm's links are its bodies where the kinematic tree puts them

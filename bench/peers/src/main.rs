@@ -10,8 +10,8 @@ mod pile;
 mod rapier;
 
 use clap::Parser;
-use cosim_server::bench::accuracy::{self, Point, Sweep};
-use cosim_server::bench::cases::CaseId;
+use cosim_bench::accuracy::{self, Point, Sweep};
+use cosim_bench::cases::CaseId;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -55,7 +55,7 @@ struct Args {
     /// Our first tolerance also with sleeping at these thresholds,
     /// `LINEAR,ANGULAR` (m/s, rad/s): `0.1,2` is about Rapier's rule for
     /// these spheres (no point faster than 0.1 m/s over a step).
-    #[arg(long, value_parser = cosim_server::bench::pile::sleep_speeds)]
+    #[arg(long, value_parser = cosim_bench::pile::sleep_speeds)]
     ours_sleep_speeds: Option<cosim_shared::scene::SleepDesc>,
     /// Rapier's iteration counts (each with sleeping off and on).
     #[arg(long, value_delimiter = ',', default_value = "1,4,8,16")]
@@ -70,10 +70,10 @@ struct Args {
 }
 
 fn piles(args: &Args) -> ExitCode {
-    use cosim_server::bench::pile::{Settings, Shape};
+    use cosim_bench::pile::{Settings, Shape};
     use cosim_shared::scene::SleepDesc;
     // The pile scene's own rule at each tolerance.
-    let rule = cosim_server::bench::pile::pgs;
+    let rule = cosim_bench::pile::pgs;
     let settings = Settings {
         dt: 0.01,
         steps: args.pile_steps,

@@ -2,9 +2,9 @@
 //! our scene, steps it, writes the trajectory and times whole runs with
 //! `mujoco.rollout`; the trajectory is scored here by our `Scorer`.
 
-use cosim_server::bench::accuracy::{no_figure, Point, Trajectory};
-use cosim_server::bench::cases::{corner_forces, CaseId, Pose, Sample, Scorer};
-use cosim_server::engine::Model;
+use cosim_bench::accuracy::{no_figure, Point, Trajectory};
+use cosim_bench::cases::{corner_forces, CaseId, Pose, Sample, Scorer};
+use cosim_engine::Model;
 use cosim_shared::Scene;
 use std::path::PathBuf;
 use std::process::Command;

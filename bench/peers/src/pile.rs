@@ -7,10 +7,10 @@
 //! and twists too. Timing covers the step calls only.
 
 use crate::rapier;
-use cosim_server::bench::accuracy::bounds;
-use cosim_server::bench::pile::{self, Settings};
-use cosim_server::engine::{measure, BodyState, Model, State};
-use cosim_server::plot::{color, ensure_font, log_log, LogLog, FONT};
+use cosim_bench::accuracy::bounds;
+use cosim_bench::pile::{self, Settings};
+use cosim_engine::{measure, BodyState, Model, State};
+use cosim_figures::{color, ensure_font, log_log, LogLog, FONT};
 use cosim_shared::scene::SleepDesc;
 use cosim_shared::Scene;
 use plotters::prelude::*;

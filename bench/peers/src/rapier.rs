@@ -1,8 +1,8 @@
 //! Rapier (rapier3d-f64) on the cases: the scene built as a Rapier user
 //! would, with Rapier's default integration parameters.
 
-use cosim_server::bench::accuracy::{median_run_time, no_figure, Point, Trajectory};
-use cosim_server::bench::cases::{CaseId, Pose, Sample, Scorer};
+use cosim_bench::accuracy::{median_run_time, no_figure, Point, Trajectory};
+use cosim_bench::cases::{CaseId, Pose, Sample, Scorer};
 use cosim_shared::{JointKind, Scene, ShapeDesc};
 use rapier3d_f64::na::Unit;
 use rapier3d_f64::prelude::*;

@@ -1,6 +1,7 @@
 //! The step report: what every step says about itself.
 
 use crate::measure::Energy;
+use crate::model::Party;
 use crate::solver::fallback::Fallback;
 use crate::solver::mlcp::MlcpError;
 use crate::solver::{LemkeError, Rung};
@@ -22,14 +23,6 @@ pub enum ImpulseKind {
     JointLimit,
     /// A joint motor's impulse on A, as a limit's (`motor.rs`).
     JointMotor,
-}
-
-/// One side of an impulse: a body, a plane or the world.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Party {
-    World,
-    Body(usize),
-    Plane(usize),
 }
 
 /// The world-frame impulse on `a` over the step; `b` receives the opposite.
@@ -292,5 +285,27 @@ impl LadderCounts {
     /// Steps that did not solve the rigid LCP of formulation.md.
     pub fn fell_back(&self) -> u64 {
         self.relaxed + self.compliant
+    }
+}
+
+/// The ladder's counts on one line of a run summary.
+impl std::fmt::Display for LadderCounts {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let rungs: Vec<String> = Rung::LADDER
+            .iter()
+            .zip(self.rungs)
+            .filter(|(_, n)| *n > 0)
+            .map(|(r, n)| format!("{} {n}", r.as_str()))
+            .collect();
+        write!(
+            f,
+            "{}; refined {}; fell back: relaxed {}, compliant {} (largest eps {:.1e}), energy-refused {}",
+            if rungs.is_empty() { "no Lemke solve".to_string() } else { rungs.join(", ") },
+            self.refined,
+            self.relaxed,
+            self.compliant,
+            self.max_compliance,
+            self.energy_refused
+        )
     }
 }

@@ -274,6 +274,14 @@ pub enum Counterpart {
     World,
 }
 
+/// One side of an impulse: a body, a plane or the world.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Party {
+    World,
+    Body(usize),
+    Plane(usize),
+}
+
 /// The weld group of the world (see `Model::weld`).
 pub const WELDED_TO_WORLD: usize = usize::MAX;
 
@@ -659,5 +667,26 @@ impl Model {
             0
         };
         (n * self.planes.len() + pairs) * self.features
+    }
+}
+
+impl Model {
+    /// The name of one side of an impulse, as the outputs write it.
+    pub fn party_name(&self, p: Party) -> &str {
+        match p {
+            Party::World => cosim_shared::scene::WORLD,
+            Party::Body(i) => &self.bodies[i].name,
+            Party::Plane(i) => &self.planes[i].name,
+        }
+    }
+
+    /// Contact `id`'s name: `a/b`, e.g. `upper/floor`, and `a/b#k` for a
+    /// pair's contact `k > 0` (`cosim_shared::contact_label`).
+    pub fn contact_name(&self, id: usize, a: Party, b: Party) -> String {
+        cosim_shared::contact_label(
+            self.party_name(a),
+            self.party_name(b),
+            self.contact_feature(id),
+        )
     }
 }

@@ -4,9 +4,9 @@
 
 use super::Engine;
 use crate::constraint::{joint, motor};
-use crate::measure::report::{ImpulseKind, ImpulseRecord, Party, StepReport};
+use crate::measure::report::{ImpulseKind, ImpulseRecord, StepReport};
 use crate::model::state;
-use crate::model::{Attachment, Counterpart};
+use crate::model::{Attachment, Counterpart, Party};
 use nalgebra::Vector3;
 
 impl Engine {

@@ -165,7 +165,7 @@ pub enum BenchWhat {
         trace: u64,
         /// PGS: the stopping rule's tolerance (m/s); the pile scene's own
         /// (`bench::pile::TOLERANCE`) by default.
-        #[arg(long, default_value_t = crate::bench::pile::TOLERANCE)]
+        #[arg(long, default_value_t = cosim_bench::pile::TOLERANCE)]
         velocity_tolerance: f64,
         /// PGS: sweep cap.
         #[arg(long, default_value_t = crate::engine::solver::pgs::DEFAULT_MAX_ITERATIONS)]
@@ -191,7 +191,7 @@ pub enum BenchWhat {
         /// rad/s; implies --sleep). Rapier's rule amounts to about
         /// `0.1,2` for these spheres: a body sleeps when no point of it
         /// moved faster than 0.1 m/s over a step.
-        #[arg(long, value_parser = crate::bench::pile::sleep_speeds)]
+        #[arg(long, value_parser = cosim_bench::pile::sleep_speeds)]
         sleep_speeds: Option<cosim_shared::scene::SleepDesc>,
         /// A pendulum swings above the pile: a body that never sleeps (it
         /// is on a joint) beside a pile that does, as a robot beside a
@@ -418,7 +418,7 @@ pub fn main() -> ExitCode {
                     ..
                 },
         } => {
-            print!("{}", crate::bench::fuzz::scene_text(case));
+            print!("{}", crate::fuzz::scene_text(case));
             ExitCode::SUCCESS
         }
         Command::Bench {
@@ -431,7 +431,7 @@ pub fn main() -> ExitCode {
                     ..
                 },
         } => {
-            use crate::bench::fuzz;
+            use crate::fuzz;
             // The engine's warnings about the broken scenes would bury the
             // counts: the defects are what this prints.
             let quiet = tracing::subscriber::NoSubscriber::default();
@@ -461,7 +461,7 @@ pub fn main() -> ExitCode {
                     ..
                 },
         } => {
-            print!("{}", crate::bench::robust::scene(seed));
+            print!("{}", cosim_bench::robust::scene(seed));
             ExitCode::SUCCESS
         }
         Command::Bench {
@@ -475,7 +475,7 @@ pub fn main() -> ExitCode {
                     ..
                 },
         } => {
-            use crate::bench::robust;
+            use cosim_bench::robust;
             let table = robust::run(scenes, steps, seed, solver)
                 .map(|s| robust::table(&s, steps, seed, solver));
             print_table("bench robust", table, out.as_deref())
@@ -501,7 +501,7 @@ pub fn main() -> ExitCode {
                     out,
                 },
         } => {
-            use crate::bench::pile;
+            use cosim_bench::pile;
             let settings = pile::Settings {
                 dt,
                 steps,
@@ -523,7 +523,7 @@ pub fn main() -> ExitCode {
             let rows: Vec<_> = n.iter().map(|&n| pile::run(n, &settings)).collect();
             let table = format!(
                 "# Pile\n\nMachine: {}.\n\n{}",
-                crate::bench::accuracy::machine(),
+                cosim_bench::accuracy::machine(),
                 pile::table(&rows, &settings)
             );
             print_table("bench pile", Ok(table), out.as_deref())
@@ -531,11 +531,11 @@ pub fn main() -> ExitCode {
         Command::Bench {
             what: BenchWhat::Skips { steps, out },
         } => {
-            let table = crate::bench::skips::measure(steps).map(|ms| {
+            let table = cosim_bench::skips::measure(steps).map(|ms| {
                 format!(
                     "# Skips\n\nMachine: {}. Median microseconds per step, skip on / off, from the step reports.\n\n{}",
-                    crate::bench::accuracy::machine(),
-                    crate::bench::skips::table(&ms, steps)
+                    cosim_bench::accuracy::machine(),
+                    cosim_bench::skips::table(&ms, steps)
                 )
             });
             print_table("bench skips", table, out.as_deref())
@@ -553,7 +553,7 @@ pub fn main() -> ExitCode {
 }
 
 fn bench_accuracy(args: &AccuracyArgs) -> ExitCode {
-    use crate::bench::{accuracy, cases::CaseId};
+    use cosim_bench::{accuracy, cases::CaseId};
     let mut sweep = if args.quick {
         accuracy::Sweep::quick()
     } else {
@@ -606,7 +606,7 @@ fn bench_stress(
     long_steps: u64,
     out: Option<&std::path::Path>,
 ) -> ExitCode {
-    use crate::bench::stress;
+    use cosim_bench::stress;
     let mut all = Vec::new();
     for &s in solvers {
         for o in stress::all(s, long_steps) {
@@ -624,7 +624,7 @@ fn bench_stress(
     }
     let table = format!(
         "# Stress suite\n\nMachine: {}.\n\n{}",
-        crate::bench::accuracy::machine(),
+        cosim_bench::accuracy::machine(),
         stress::table(&all)
     );
     if let Some(path) = out {

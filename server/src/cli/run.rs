@@ -3,7 +3,7 @@
 use super::{PlotArgs, RunArgs, EXIT_BAD_INPUT, EXIT_FAILED};
 use crate::engine::{Engine, Model, StepReport};
 use crate::output::{num, Writers};
-use crate::plot::{self, PlotOptions};
+use cosim_figures::{self as plot, PlotOptions};
 use cosim_shared::{Scene, SceneError};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -14,9 +14,11 @@ use std::time::Instant;
 pub fn load(args: &RunArgs) -> Result<Scene, SceneError> {
     let mut scene = match &args.scene {
         // A URDF robot (`.urdf`) is read as a scene of its own (urdf.rs).
-        Some(path) if path.extension().is_some_and(|e| e == "urdf") => crate::urdf::load(path)?,
+        Some(path) if path.extension().is_some_and(|e| e == "urdf") => {
+            cosim_import::urdf::load(path)?
+        }
         Some(path) => Scene::load(path)?,
-        None => crate::scenes::reference()?,
+        None => cosim_shared::scenes::reference()?,
     };
     let file = args
         .scene
@@ -164,7 +166,7 @@ pub fn run(args: &RunArgs) -> ExitCode {
 /// Writes `DIR/recording.mcap` from the run's files.
 fn record(dir: &std::path::Path, quiet: bool) -> Result<(), ExitCode> {
     let path = dir.join("recording.mcap");
-    match crate::mcap::write(dir, &path) {
+    match cosim_figures::mcap::write(dir, &path) {
         Ok(w) => {
             if !quiet {
                 let n: u64 = w.messages.values().sum();
@@ -179,8 +181,8 @@ fn record(dir: &std::path::Path, quiet: bool) -> Result<(), ExitCode> {
         Err(e) => {
             eprintln!("error: {e}");
             Err(ExitCode::from(match e {
-                crate::mcap::McapError::Read(_) => EXIT_BAD_INPUT,
-                crate::mcap::McapError::Write(_) => EXIT_FAILED,
+                cosim_figures::mcap::McapError::Read(_) => EXIT_BAD_INPUT,
+                cosim_figures::mcap::McapError::Write(_) => EXIT_FAILED,
             }))
         }
     }
@@ -458,7 +460,7 @@ fn simulate(
             }
         );
         println!("LCP          largest {} unknowns, {} pivots in all, worst residual {:.1e}, {} re-solves, {} regularised solves", tally.max_lcp_size, tally.pivots, tally.max_residual, tally.resolves, tally.regularized);
-        println!("ladder       {}", crate::output::ladder_line(&tally.ladder));
+        println!("ladder       {}", tally.ladder);
         if shadow {
             println!(
                 "shadow       largest velocity difference to the other solver {:.2e} m/s, {:.2e} rad/s",

@@ -1,11 +1,11 @@
 //! `cosim-server serve`, `demo`, `replay` and the demo's controller.
 
 use super::{RunArgs, EXIT_BAD_INPUT, EXIT_FAILED};
-use crate::plot::{self, PlotOptions};
 use crate::serve::controllers::{FailurePolicy, MissPolicy};
 use crate::serve::replay::{replay as run_replay, ReplayOutcome};
 use crate::serve::{serve as run_serve, Ending, ServeError, ServeOptions};
 use cosim_client::WaitMode;
+use cosim_figures::{self as plot, PlotOptions};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;

@@ -222,7 +222,7 @@ fn raw_pingpong(mode: WaitMode, n: usize) -> Result<f64, BoxError> {
     let base = format!("cosim-bench-{}-{}", std::process::id(), mode.as_str());
     let p = PingPong::open(&base)?;
     // The reference scene's frame as the server publishes it.
-    let engine = Engine::new(Model::from_scene(&crate::scenes::reference()?));
+    let engine = Engine::new(Model::from_scene(&cosim_shared::scenes::reference()?));
     let capacity = super::frame::contact_capacity(engine.model());
     let mut frame = StateFrame::default();
     super::frame::fill(&mut frame, &engine, None, capacity);
@@ -325,7 +325,7 @@ fn lockstep_of(
     }
     // A run of a million steps is Lemke's alone: the solve ladder takes
     // the reference scene through 10^6 steps (every_step_succeeds.rs).
-    let scene = crate::scenes::reference()?;
+    let scene = cosim_shared::scenes::reference()?;
     let opts = ServeOptions {
         name: name.clone(),
         controllers,
@@ -499,7 +499,7 @@ fn tcp_lockstep(steps: u64) -> Result<(f64, f64, f64, f64), BoxError> {
     let _peer = peer(&["tcp", "--name", &port, "--wait", "block"])?;
     let (mut sock, _) = listener.accept()?;
     sock.set_nodelay(true)?;
-    let mut engine = Engine::new(Model::from_scene(&crate::scenes::reference()?));
+    let mut engine = Engine::new(Model::from_scene(&cosim_shared::scenes::reference()?));
     let capacity = super::frame::contact_capacity(engine.model());
     let mut frame = StateFrame::default();
     let mut bytes = Vec::new();

@@ -6,8 +6,8 @@
 //! prints the table (`bench/results/stress.md`).
 
 use super::text::{joint, plane, sphere};
-use crate::engine::solver::PgsParams;
-use crate::engine::{Engine, Model, StepReport};
+use cosim_engine::solver::PgsParams;
+use cosim_engine::{Engine, Model, StepReport};
 use cosim_shared::{Scene, SolverChoice};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -132,7 +132,7 @@ fn sim(h: f64, extra: &str) -> String {
 }
 /// Total normal force (N) on the planes in the last step.
 fn plane_force(e: &Engine) -> f64 {
-    use crate::engine::{ImpulseKind, Party};
+    use cosim_engine::{ImpulseKind, Party};
     e.impulses()
         .iter()
         .filter(|r| r.kind == ImpulseKind::Normal && matches!(r.b, Party::Plane(_)))
@@ -505,7 +505,7 @@ pub fn redundant(kind: &str, solver: SolverChoice) -> Outcome {
 /// The reference scene for `steps` steps: no failure, joints and energy
 /// bounded.
 pub fn long_run(steps: u64, solver: SolverChoice) -> Outcome {
-    let mut scene = match crate::scenes::reference() {
+    let mut scene = match cosim_shared::scenes::reference() {
         Ok(s) => s,
         Err(e) => panic!("built-in scene: {e}"),
     };

@@ -12,10 +12,10 @@
 //! The tests run 500 scenes of 20 steps (`tests/tests/robust.rs`); the
 //! command runs as many as asked.
 
-use crate::bench::text::{joint, plane, sphere};
-use crate::engine::measure::energy;
-use crate::engine::model::state::asleep;
-use crate::engine::{Engine, LadderCounts, Model};
+use crate::text::{joint, plane, sphere};
+use cosim_engine::measure::energy;
+use cosim_engine::model::state::asleep;
+use cosim_engine::{Engine, LadderCounts, Model};
 use cosim_shared::{Scene, SolverChoice};
 
 /// xorshift64*: a small deterministic generator, enough for scene sampling.
@@ -292,7 +292,7 @@ pub fn scene(seed: u64) -> String {
 /// than 5 mm into a plane, or overlap another body's bounding sphere by
 /// more than 3 mm, stays a sphere.
 fn shaped(seed: u64, planes: &[PlaneDesc], centres: &mut [([f64; 3], f64)]) -> Vec<Option<String>> {
-    use crate::engine::model::Shape;
+    use cosim_engine::model::Shape;
     use nalgebra::{Quaternion, UnitQuaternion, Vector3};
     let mut rng = Rng::new(seed ^ 0x7368_6170_6573);
     let mut out = vec![None; centres.len()];
@@ -468,10 +468,10 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
                 }),
         );
         for j in &m.joints {
-            use crate::engine::Attachment;
+            use cosim_engine::Attachment;
             // A slider's effort is a force at B's anchor, on both sides.
             let at = j.slide.map(|_| {
-                crate::engine::model::kinematics::anchor(j.b, &j.local_b, engine.state()).0
+                cosim_engine::model::kinematics::anchor(j.b, &j.local_b, engine.state()).0
             });
             for (att, sign) in [(j.a, -1.0), (j.b, 1.0)] {
                 if let Attachment::Body(i) = att {
@@ -657,7 +657,7 @@ pub fn table(s: &Summary, steps: u64, seed0: u64, solver: SolverChoice) -> Strin
         s.first_failure
             .as_ref()
             .map_or("none".to_string(), |(seed, m)| format!("seed {seed}: {m}")),
-        crate::output::ladder_line(&s.ladder),
+        s.ladder,
         s.worst_kinetic.0,
         s.worst_kinetic.1,
         s.worst_energy.0,

@@ -1,6 +1,7 @@
-//! Scenes built into the binary.
+//! Scenes built into the tools: the reference scene, which `run` steps
+//! without a scene file and the benchmarks and tests share.
 
-use cosim_shared::{Scene, SceneError};
+use crate::{Scene, SceneError};
 
 /// The reference scene, run when no scene is given.
 pub const REFERENCE: &str = include_str!("../../examples/scenes/reference.toml");

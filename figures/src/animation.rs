@@ -11,7 +11,7 @@
 use super::data::RunData;
 use super::gif::GifWriter;
 use super::{color, PlotError, FONT};
-use crate::engine::model::{Attachment, Model, Shape};
+use cosim_engine::model::{Attachment, Model, Shape};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use plotters::prelude::*;
 use std::path::Path;
@@ -91,7 +91,7 @@ impl Camera {
         let default = {
             let d = default
                 + world_up * 0.5
-                + crate::engine::model::kinematics::perpendicular(&world_up) * 0.15;
+                + cosim_engine::model::kinematics::perpendicular(&world_up) * 0.15;
             d.normalize()
         };
         let dir = camera
@@ -105,7 +105,7 @@ impl Camera {
             if r.norm() > 1e-9 {
                 r.normalize()
             } else {
-                crate::engine::model::kinematics::perpendicular(&forward)
+                cosim_engine::model::kinematics::perpendicular(&forward)
             }
         };
         let up = right.cross(&forward);
@@ -345,7 +345,7 @@ fn nice(span: f64) -> f64 {
 /// move), each cut to the side of every other plane the bodies are on.
 fn floor_grid(
     model: &Model,
-    floor: &crate::engine::model::Plane,
+    floor: &cosim_engine::model::Plane,
     cam: &Camera,
     half: f64,
 ) -> Vec<(Vector3<f64>, Vector3<f64>)> {
@@ -358,7 +358,7 @@ fn floor_grid(
     let t1 = if x.norm() > 0.1 {
         x.normalize()
     } else {
-        crate::engine::model::kinematics::perpendicular(&n)
+        cosim_engine::model::kinematics::perpendicular(&n)
     };
     let t2 = n.cross(&t1);
     let spacing = nice(2.0 * half / 12.0);
@@ -425,7 +425,7 @@ fn draw_frame<DB: DrawingBackend>(
     let mut patches: Vec<(f64, u8, Vec<Vector3<f64>>)> = Vec::new();
     for (k, p) in model.planes.iter().enumerate() {
         let p0 = cam.target - p.normal * (p.normal.dot(&cam.target) - p.offset);
-        let t1 = crate::engine::model::kinematics::perpendicular(&p.normal);
+        let t1 = cosim_engine::model::kinematics::perpendicular(&p.normal);
         let t2 = p.normal.cross(&t1);
         let mut poly: Vec<Vector3<f64>> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
             .iter()
@@ -659,7 +659,7 @@ fn draw_frame<DB: DrawingBackend>(
     // pushes at the contact point, from outside the body it acts on.
     if i > 0 {
         if let Some(h) = run.h() {
-            let mut state = crate::engine::State::initial(model);
+            let mut state = cosim_engine::State::initial(model);
             super::pose_state(run, i, &mut state);
             for ((kind, name), series) in &run.impulses {
                 let Some(Some(p)) = series.get(i - 1) else {

@@ -7,7 +7,7 @@
 //! definition of "error" for everybody on the diagrams.
 
 use super::text::{capsule, cuboid, force, hinge, joint, plane, sphere};
-use crate::engine::Model;
+use cosim_engine::Model;
 use cosim_shared::{JointKind, Scene, SceneError, ShapeDesc};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use std::f64::consts::FRAC_PI_4;
@@ -191,7 +191,7 @@ impl CaseId {
     pub fn scene(self, h: f64, nd: usize) -> Result<Scene, SceneError> {
         let steps = (self.duration() / h).round() as u64;
         let mut scene = match self {
-            CaseId::Reference => crate::scenes::reference()?,
+            CaseId::Reference => cosim_shared::scenes::reference()?,
             _ => Scene::parse(&self.toml(h, steps), self.key())?,
         };
         scene.sim.dt = h;

@@ -26,8 +26,8 @@
 //! - `/forces/KIND/NAME` (`cosim.Force`, N: the step's impulse over h),
 //!   one per step in which that contact or joint had an impulse.
 
-use crate::engine::Model;
-use crate::plot::data::RunData;
+use crate::data::RunData;
+use cosim_engine::Model;
 pub use cosim_foxglove::record::Written;
 use cosim_foxglove::record::{RecordError, Recording};
 use cosim_foxglove::{draw, schema, Arrow, Drawing, Pose};
@@ -105,10 +105,10 @@ fn states(
         .iter()
         .map(|c| format!("/joints/{}", c.name))
         .collect();
-    let mut state = crate::engine::State::initial(model);
+    let mut state = cosim_engine::State::initial(model);
     for (i, &t) in run.t.iter().enumerate() {
         let poses: Vec<Pose> = run.bodies.iter().map(|b| body_pose(&b.rows[i])).collect();
-        crate::plot::pose_state(run, i, &mut state);
+        crate::pose_state(run, i, &mut state);
         // Contact forces of the step that ended in this state.
         let mut arrows = Vec::new();
         if i > 0 {
@@ -119,7 +119,7 @@ fn states(
                 if kind != "normal" {
                     continue;
                 }
-                let Some(at) = crate::plot::contact_point(model, &state, name) else {
+                let Some(at) = crate::contact_point(model, &state, name) else {
                     continue;
                 };
                 arrows.push(Arrow {

@@ -17,9 +17,9 @@
 //!
 //! `cosim-server bench fuzz` runs many cases; the tests run a few thousand.
 
-use crate::bench::robust::Rng;
-use crate::engine::{Engine, Model};
 use crate::serve::controllers::{self, Limits, Slot};
+use cosim_bench::robust::Rng;
+use cosim_engine::{Engine, Model};
 use cosim_shared::wire::{
     input_words, ControlRequest, InputFrame, InputHeader, CMD_JOIN, CMD_SHUTDOWN, IMPULSE_WORDS,
     PROTOCOL_VERSION, ROLE_CONTROLLER, TORQUE_WORDS,
@@ -30,12 +30,12 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// The shipped scenes, the seeds of the mutations.
 const SEEDS: [&str; 6] = [
-    include_str!("../../../examples/scenes/reference.toml"),
-    include_str!("../../../examples/scenes/friction.toml"),
-    include_str!("../../../examples/scenes/frictionless.toml"),
-    include_str!("../../../examples/scenes/joint_torques.toml"),
-    include_str!("../../../examples/scenes/joints.toml"),
-    include_str!("../../../examples/scenes/restitution.toml"),
+    include_str!("../../examples/scenes/reference.toml"),
+    include_str!("../../examples/scenes/friction.toml"),
+    include_str!("../../examples/scenes/frictionless.toml"),
+    include_str!("../../examples/scenes/joint_torques.toml"),
+    include_str!("../../examples/scenes/joints.toml"),
+    include_str!("../../examples/scenes/restitution.toml"),
 ];
 
 /// Numbers that break parsers and physics.
@@ -517,7 +517,7 @@ pub fn control_request(rng: &mut Rng) -> ControlRequest {
 /// in the next step.
 pub fn inputs(seed: u64, n: u64) -> Counts {
     let mut counts = Counts::default();
-    let scene = match crate::scenes::reference() {
+    let scene = match cosim_shared::scenes::reference() {
         Ok(s) => s,
         Err(e) => {
             counts.defects.push(format!("the reference scene: {e}"));

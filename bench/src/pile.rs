@@ -5,9 +5,9 @@
 //! 10 at 1,000, the issue's) or, with [`Shape::Layers`], a square of that
 //! many layers that widens with N, and the walls 0.05 m outside it.
 
-use crate::bench::robust::Rng;
-use crate::bench::text::{joint, plane, sphere};
-use crate::engine::solver::PgsParams;
+use crate::robust::Rng;
+use crate::text::{joint, plane, sphere};
+use cosim_engine::solver::PgsParams;
 use cosim_shared::scene::SleepDesc;
 use cosim_shared::Scene;
 
@@ -238,7 +238,7 @@ pub struct Outcome {
 
 /// Runs the pile of `n` spheres as `settings` say.
 pub fn run(n: usize, settings: &Settings) -> Outcome {
-    use crate::engine::{Engine, Model};
+    use cosim_engine::{Engine, Model};
     let Settings {
         dt,
         steps,

@@ -5,10 +5,10 @@
 //! table with [`Point`] and redraws with [`diagrams`].
 
 use super::cases::{CaseId, Pose, Sample, Score, Scorer};
-use crate::engine::solver::PgsParams;
-use crate::engine::{Engine, ImpulseKind, Model};
-use crate::output::{contact_name, num};
-use crate::plot::{color, FONT};
+use cosim_engine::solver::PgsParams;
+use cosim_engine::{Engine, ImpulseKind, Model};
+use cosim_figures::{color, FONT};
+use cosim_shared::num;
 use cosim_shared::{FrictionCone, PositionUpdate, Scene, SolverChoice};
 use plotters::prelude::*;
 use std::fmt::Write as _;
@@ -147,7 +147,7 @@ pub fn sample(engine: &Engine, out: &mut Sample) {
         .filter(|r| r.kind == ImpulseKind::Normal)
     {
         out.forces.push((
-            contact_name(engine.model(), r.index, r.a, r.b),
+            engine.model().contact_name(r.index, r.a, r.b),
             r.impulse.norm() / h,
         ));
     }
@@ -397,7 +397,7 @@ const ERROR_FLOOR: f64 = 1e-14;
 /// One log-log diagram per case: `<dir>/accuracy-<case>.png`, a curve per
 /// engine and setting through its h values.
 pub fn diagrams(points: &[Point], dir: &Path, machine: &str) -> Result<Vec<PathBuf>, String> {
-    crate::plot::ensure_font().map_err(|e| e.to_string())?;
+    cosim_figures::ensure_font().map_err(|e| e.to_string())?;
     let mut files = Vec::new();
     let mut cases: Vec<CaseId> = Vec::new();
     for p in points {
@@ -427,7 +427,7 @@ fn draw(
     machine: &str,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let root = BitMapBackend::new(path, (1000, 720)).into_drawing_area();
-    let mut chart = crate::plot::log_log(
+    let mut chart = cosim_figures::log_log(
         &root,
         &format!("{} ({})", case.title(), machine),
         bounds(pts.iter().map(|p| p.wall_per_sim_s)),
@@ -471,7 +471,7 @@ fn draw(
         // One-pixel paths side by side, in the image's pixels: plotters
         // draws wider strokes wrongly in bitmaps (plotters issue 549).
         let pixels: Vec<(i32, i32)> = line.iter().map(|p| chart.backend_coord(p)).collect();
-        crate::plot::thick_path(&root, &pixels, c, if engine == "ours" { 2 } else { 3 })
+        cosim_figures::thick_path(&root, &pixels, c, if engine == "ours" { 2 } else { 3 })
             .map_err(|e| e.to_string())?;
         chart
             .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())?

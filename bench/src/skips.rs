@@ -3,13 +3,13 @@
 //! scene in one run, and how far apart the two trajectories end up (the
 //! skips must not change the answer).
 
-use crate::engine::model::Params;
-use crate::engine::solver::PgsParams;
-use crate::engine::{Engine, Model, Timings};
+use cosim_engine::model::Params;
+use cosim_engine::solver::PgsParams;
+use cosim_engine::{Engine, Model, Timings};
 use cosim_shared::{Scene, SolverChoice};
 use std::fmt::Write as _;
 
-const FRICTIONLESS: &str = include_str!("../../../examples/scenes/frictionless.toml");
+const FRICTIONLESS: &str = include_str!("../../examples/scenes/frictionless.toml");
 /// Two boxes stacked on a floor, the upper sliding, and a capsule rolling
 /// into them: supports on several vertices and ends, faces clipped
 /// between boxes (a small scene: the full LCP of shapes.toml holds 930
@@ -166,8 +166,8 @@ fn model(scene: &Scene, solver: SolverChoice) -> Model {
 /// time, so that listing every pair (2,016) against those within reach is
 /// what the broad phase saves.
 pub fn gas() -> Result<Scene, String> {
-    use crate::bench::text::{plane, sphere};
-    let mut rng = crate::bench::robust::Rng::new(14);
+    use crate::text::{plane, sphere};
+    let mut rng = crate::robust::Rng::new(14);
     let mut t = String::from(
         "[sim]\nname = \"gas\"\ndt = 0.002\nsteps = 1000\ngravity = [0.0, 0.0, 0.0]\nfriction_directions = 4\nsolver = \"lemke\"\n\n",
     );
@@ -204,7 +204,7 @@ pub fn gas() -> Result<Scene, String> {
 /// warm start on the reference scene, friction rows on the frictionless
 /// scene, the broad phase on [`gas`].
 pub fn measure(steps: u64) -> Result<Vec<Measured>, String> {
-    let reference = crate::scenes::reference().map_err(|e| e.to_string())?;
+    let reference = cosim_shared::scenes::reference().map_err(|e| e.to_string())?;
     let frictionless =
         Scene::parse(FRICTIONLESS, "frictionless.toml").map_err(|e| e.to_string())?;
     let gas = gas()?;

@@ -1,23 +1,28 @@
-//! Figures and the animation of a run, drawn from its output files.
+//! `cosim-figures`: what a run looks like, drawn from its output files
+//! alone: the figures (PNG and SVG), the animation (GIF), and the MCAP
+//! recording for Foxglove. No IPC, no engine state beyond what the files
+//! hold (the engine is used for its contact geometry).
 
 pub mod animation;
 pub mod data;
 pub mod figures;
 pub mod gif;
+pub mod mcap;
 
-use crate::engine::model::Counterpart;
-use crate::engine::{Model, State};
+use cosim_engine::model::Counterpart;
+use cosim_engine::{Model, State};
 use cosim_shared::Scene;
 use data::RunData;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
-use plotters::prelude::RGBColor;
+/// The colour type of [`color`], for readers of the figures.
+pub use plotters::prelude::RGBColor;
 use std::path::{Path, PathBuf};
 use std::sync::Once;
 
 /// The font family the figures use: DejaVu Sans, embedded in the binary
 /// (`assets/`), so that text renders on a machine without any font.
 pub const FONT: &str = "sans-serif";
-static FONT_BYTES: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+static FONT_BYTES: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 
 /// Registers the embedded font (once); every drawing calls it first.
 pub fn ensure_font() -> Result<(), PlotError> {
@@ -85,7 +90,7 @@ pub fn contact_point(model: &Model, state: &State, name: &str) -> Option<Vector3
         return None;
     }
     let id = model.contact_id(ia, other, feature);
-    crate::engine::collision::contact_point(model, state, id)
+    cosim_engine::collision::contact_point(model, state, id)
 }
 
 /// A log-log chart as the benchmarks draw them.
