@@ -4,6 +4,7 @@
 //! hold (the engine is used for its contact geometry).
 
 pub mod animation;
+pub mod chart;
 pub mod data;
 pub mod figures;
 pub mod gif;
@@ -201,12 +202,12 @@ impl PlotOptions {
 
 /// The frame of a run folder's figures: its scene named when its
 /// `scene.toml` reads (an old recording without one is still drawn).
-fn frame_of(dir: &Path) -> figures::Frame {
-    figures::Frame {
+fn frame_of(dir: &Path) -> chart::Frame {
+    chart::Frame {
         subtitle: Scene::load(&dir.join("scene.toml"))
             .map(|s| subtitle(&s))
             .unwrap_or_default(),
-        ..figures::Frame::default()
+        ..chart::Frame::default()
     }
 }
 
@@ -246,7 +247,7 @@ pub fn subtitle(scene: &Scene) -> String {
     format!(
         "scene {}, h = {} s, solver {}, n_d = {}",
         sim.name.as_deref().unwrap_or("(unnamed)"),
-        figures::tick(sim.dt),
+        chart::tick(sim.dt),
         sim.solver.as_str(),
         sim.friction_directions
     )

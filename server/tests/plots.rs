@@ -229,7 +229,7 @@ fn components(pixels: &[(u32, u32)]) -> Vec<Vec<(u32, u32)>> {
 /// tick labels, and spans the time axis.
 #[test]
 fn a_known_series_is_drawn_where_it_must_be_and_nowhere_else() {
-    use cosim_figures::figures::{figure, Frame, Panel, Series};
+    use cosim_figures::chart::{figure, Frame, Panel, Series};
     let tmp = TempDir::new("plots-pixels");
     // A baseline at 0, a one-sample spike to 10 at t = 1.5, a step to 1
     // at t = 1.8 (the shape of an impact on a resting contact).
