@@ -283,7 +283,7 @@ pub struct StateHeader {
     /// Unknowns of the last step's LCP.
     pub lcp_size: u32,
     pub _pad: u32,
-    /// Residual of the last step's LCP (natural map, see README).
+    /// Residual of the last step's LCP (natural map, see docs/solvers.md).
     pub residual: f64,
     /// Step size (s).
     pub dt: f64,
@@ -326,7 +326,7 @@ pub struct StateFrame {
     pub solver_status: u32,
     /// Unknowns of the last step's LCP.
     pub lcp_size: u32,
-    /// Residual of the last step's LCP (natural map, see README).
+    /// Residual of the last step's LCP (natural map, see docs/solvers.md).
     pub residual: f64,
     /// Step size (s).
     pub dt: f64,

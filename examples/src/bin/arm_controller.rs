@@ -4,7 +4,7 @@
 //! protocol 4), and prints the last angles it read.
 //!
 //! ```sh
-//! cosim-server serve examples/scenes/arm.toml --controllers 1 --name lab &
+//! cosim-server serve examples/scenes/arm.toml --controllers 1 --name lab --duration 3 &
 //! cargo run --release -p cosim-examples --bin arm_controller -- --name lab
 //! ```
 

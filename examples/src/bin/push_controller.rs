@@ -4,7 +4,7 @@
 //! clipped), and prints the box's last position.
 //!
 //! ```sh
-//! cosim-server serve examples/scenes/push.toml --controllers 1 --name lab &
+//! cosim-server serve examples/scenes/push.toml --controllers 1 --name lab --duration 3 &
 //! cargo run --release -p cosim-examples --bin push_controller -- --name lab --x 0.5 --y 0.2
 //! ```
 
