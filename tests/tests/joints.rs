@@ -70,7 +70,7 @@ fn measure(h: f64, links: usize) -> Figures {
     f
 }
 
-/// Bounds met over 10 s (docs/solvers.md states them): 5e-5 m at h = 1e-3 and
+/// Bounds met over 10 s (docs/benchmarks.md states them): 5e-5 m at h = 1e-3 and
 /// 5e-3 m at h = 1e-2. The error of one step is the drift of semi-implicit
 /// Euler along the tangent, about `h^2 v^2 / L`; beta = 1 removes it in the
 /// next step, so it follows the speed and does not accumulate.
