@@ -3,7 +3,7 @@
 # has installed the Python package), each into a folder of its own and with
 # a server name of its own, and checks what each leaves behind. .ci/run
 # calls it; the demo and the test command it runs itself, and `cosim view`
-# is run by server/tests/cosim.rs against Foxglove's own client.
+# is run by server/tests/cosim/view.rs against Foxglove's own client.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=$(mktemp -d)

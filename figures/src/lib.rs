@@ -4,11 +4,13 @@
 //! hold (the engine is used for its contact geometry).
 
 pub mod animation;
+pub mod camera;
 pub mod chart;
 pub mod data;
 pub mod figures;
 pub mod gif;
 pub mod mcap;
+mod panels;
 
 use cosim_engine::model::Counterpart;
 use cosim_engine::{Model, State};

@@ -1,0 +1,101 @@
+//! The Python package: its controller and its numpy monitor.
+
+use super::*;
+
+/// The Python controller of examples/python, written from docs/protocol.md
+/// with the official iceoryx2 package (.ci/run installs it).
+#[test]
+fn the_python_controller_joins_and_answers_every_step() {
+    let (server, dir, name) = serve_test("python", &["--controllers", "1", "--steps", "1000"]);
+    let text = python_controller(&["--name", &name, "--steps", "100000"]);
+    // Steps 0..=999 are answered; state 1000 comes with the shutdown frame
+    // right behind it, so it may be read or skipped.
+    assert!(
+        text.contains("server shut down; answered 1000 steps")
+            || text.contains("server shut down; answered 1001 steps"),
+        "{text}"
+    );
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    let s = summary(dir.path());
+    assert_eq!(s["inputs_applied"], 1000, "{s}");
+    assert_eq!(s["inputs_rejected"], serde_json::json!({}));
+    assert_eq!(s["deadline_misses"], 0);
+    // It read the frames right (it copies only the entries in use): the
+    // elevation it printed for its last frame is the one in states.csv.
+    let printed = printed_after(&text, "elevation ");
+    let rows = positions(dir.path(), "upper");
+    assert!(
+        rows[999..]
+            .iter()
+            .any(|(_, x)| (elevation_deg(*x) - printed).abs() < 1e-3),
+        "printed {printed}, states.csv {:?}",
+        &rows[999..]
+    );
+}
+
+/// Issue 16, point 9: the Python package's monitor reads the decimated
+/// stream into numpy arrays that hold the server's states to the bit
+/// (compared with states.csv), while the example controller, on the same
+/// package, drives the lockstep.
+#[test]
+fn the_python_package_reads_numpy_states_to_the_bit() {
+    use std::io::BufRead;
+    let (server, dir, name) = serve_test(
+        "pymon",
+        &[
+            "--controllers",
+            "1",
+            "--steps",
+            "300",
+            "--publish-every",
+            "50",
+        ],
+    );
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/python_monitor.py");
+    let mut monitor = Proc(
+        Command::new("python3")
+            .arg(&script)
+            .arg(&name)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("python3"),
+    );
+    let mut lines = std::io::BufReader::new(monitor.0.stdout.take().unwrap()).lines();
+    assert_eq!(lines.next().map(|l| l.unwrap()), Some("ready".into()));
+    python_controller(&["--name", &name, "--steps", "100000"]);
+    let frames: Vec<serde_json::Value> = lines
+        .map(|l| serde_json::from_str(&l.unwrap()).unwrap())
+        .collect();
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    let steps: Vec<u64> = frames.iter().map(|f| f["step"].as_u64().unwrap()).collect();
+    assert_eq!(steps, [0, 50, 100, 150, 200, 250, 300], "{frames:?}");
+    let text = std::fs::read_to_string(dir.path().join("states.csv")).unwrap();
+    for f in &frames {
+        assert_eq!(f["shape"], serde_json::json!([2, 3]));
+        assert_eq!(f["joints"], serde_json::json!([2, 3]));
+        assert_eq!(f["joint_positions"], serde_json::json!(["nan", "nan"]));
+        assert_eq!(f["contact_fields"][4], "normal");
+        let step = f["step"].as_u64().unwrap();
+        let row: Vec<f64> = text
+            .lines()
+            .map(|l| l.split(',').collect::<Vec<_>>())
+            .find(|c| c[0] == step.to_string() && c[2] == "lower")
+            .map(|c| c[3..16].iter().map(|v| v.parse().unwrap()).collect())
+            .unwrap();
+        let got: Vec<f64> = ["position", "orientation", "angular_velocity"]
+            .iter()
+            .flat_map(|k| {
+                f[*k]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|v| v.as_str().unwrap().parse::<f64>().unwrap())
+            })
+            .collect();
+        let want: Vec<f64> = row[0..7].iter().chain(&row[10..13]).copied().collect();
+        assert_eq!(got, want, "step {step}");
+    }
+}

@@ -1,0 +1,127 @@
+//! `[[body]]` and `[[plane]]`: what collides, and the names of its contacts.
+
+use serde::{Deserialize, Serialize};
+
+/// `[[body]]`: a solid sphere (`radius`), capsule (`radius` and
+/// `half_length`, its segment along the body's z axis, as MuJoCo's and
+/// ODE's) or box (`half_extents`, along the body's axes).
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BodyDesc {
+    pub name: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub half_length: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub half_extents: Option<[f64; 3]>,
+    pub mass: f64,
+    /// `[ixx, iyy, izz, ixy, ixz, iyz]` about the centre of mass in the
+    /// body's frame (kg m^2), as URDF's `<inertia>`; absent: the shape's
+    /// at uniform density.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inertia: Option<[f64; 6]>,
+    pub position: [f64; 3],
+    /// Unit quaternion, scalar first.
+    #[serde(default = "identity_quaternion")]
+    pub orientation: [f64; 4],
+    #[serde(default)]
+    pub velocity: [f64; 3],
+    #[serde(default)]
+    pub angular_velocity: [f64; 3],
+    #[serde(default)]
+    pub friction: f64,
+    #[serde(default)]
+    pub restitution: f64,
+    /// Constant world-frame force (N) on the centre of mass, besides gravity.
+    #[serde(default)]
+    pub force: [f64; 3],
+}
+
+/// The most contacts one pair of shapes has: a box's eight vertices
+/// against a plane (of which the engine lists the four lowest) bound every
+/// pair's feature numbers.
+pub const MAX_FEATURES: usize = 8;
+
+/// The name a shape contact goes by in impulses.csv and the recordings:
+/// `a/b` for a pair's first (a pair of spheres' only) contact, `a/b#k`
+/// for its feature `k` (a box's vertex, a capsule's end...).
+pub fn contact_label(a: &str, b: &str, feature: usize) -> String {
+    if feature == 0 {
+        format!("{a}/{b}")
+    } else {
+        format!("{a}/{b}#{feature}")
+    }
+}
+
+/// A body's shape as the scene gives it (`BodyDesc::shape`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ShapeDesc {
+    Sphere {
+        radius: f64,
+    },
+    /// Half the segment's length along the body's z axis, and the radius.
+    Capsule {
+        radius: f64,
+        half_length: f64,
+    },
+    Box {
+        half_extents: [f64; 3],
+    },
+}
+
+impl BodyDesc {
+    /// The body's shape, or which fields are missing or clash (the message
+    /// of the error `validate` names the body's field with).
+    pub fn shape_or_error(&self) -> Result<ShapeDesc, (&'static str, String)> {
+        match (self.radius, self.half_length, self.half_extents) {
+            (Some(radius), None, None) => Ok(ShapeDesc::Sphere { radius }),
+            (Some(radius), Some(half_length), None) => Ok(ShapeDesc::Capsule {
+                radius,
+                half_length,
+            }),
+            (None, None, Some(half_extents)) => Ok(ShapeDesc::Box { half_extents }),
+            (None, Some(_), None) => Err((
+                "radius",
+                "is missing: a capsule needs radius beside half_length".into(),
+            )),
+            (None, None, None) => Err((
+                "radius",
+                "is missing: give radius (a sphere), radius and half_length (a capsule) \
+                 or half_extents (a box)"
+                    .into(),
+            )),
+            (_, _, Some(_)) => Err((
+                "half_extents",
+                "with radius or half_length: a body has one shape, a box (half_extents \
+                 alone), a sphere (radius) or a capsule (radius and half_length)"
+                    .into(),
+            )),
+        }
+    }
+
+    /// The body's shape; a sphere of radius 0 where the description has
+    /// none (`validate` refuses it first).
+    pub fn shape(&self) -> ShapeDesc {
+        self.shape_or_error()
+            .unwrap_or(ShapeDesc::Sphere { radius: 0.0 })
+    }
+}
+
+fn identity_quaternion() -> [f64; 4] {
+    [1.0, 0.0, 0.0, 0.0]
+}
+
+/// `[[plane]]`: a fixed infinite plane; bodies stay on the side its normal
+/// points to.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PlaneDesc {
+    pub name: String,
+    pub normal: [f64; 3],
+    pub point: [f64; 3],
+    #[serde(default)]
+    pub friction: f64,
+    #[serde(default)]
+    pub restitution: f64,
+}

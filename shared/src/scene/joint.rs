@@ -1,0 +1,94 @@
+//! `[[joint]]`: what a joint leaves free, its limits and motor.
+
+use serde::{Deserialize, Serialize};
+
+use super::sim::default_true;
+
+/// What a joint leaves free between its two sides.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum JointKind {
+    /// The anchor points stay together; every rotation is free (3 rows).
+    Spherical,
+    /// A hinge: the anchors stay together and the bodies turn only about
+    /// `axis` (5 rows).
+    Revolute,
+    /// The two sides move as one (6 rows).
+    Fixed,
+    /// A slider: no relative rotation, and the anchors move apart only
+    /// along `axis` (5 rows).
+    Prismatic,
+}
+
+/// `[[joint]]`: a bilateral joint between two bodies or a body and the world.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct JointDesc {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: JointKind,
+    /// `"world"` or a body name.
+    pub body_a: String,
+    pub body_b: String,
+    /// World point at t = 0, fixed in both bodies from then on.
+    pub anchor: [f64; 3],
+    /// `revolute`: the hinge axis, a world direction at t = 0, fixed in
+    /// both bodies from then on; `prismatic`: the sliding direction at
+    /// t = 0, fixed in body_a (any length but zero). Only for these two.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis: Option<[f64; 3]>,
+    /// Constant joint torque: `+torque` on body_b, `-torque` on body_a.
+    /// Not for a prismatic joint, whose effort is a force.
+    #[serde(default)]
+    pub torque: [f64; 3],
+    /// `prismatic` only: constant force (N, world frame) on body_b at its
+    /// anchor, its opposite on body_a at the same point; its part along
+    /// the axis drives the slider (the joint holds the rest).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force: Option<[f64; 3]>,
+    /// Whether the two bodies' shapes touch each other. MuJoCo and Drake
+    /// leave a joint's two bodies out of contact (links overlap at their
+    /// hinges); here the default is true, since the notes' scene has
+    /// jointed spheres that collide. With the world as one side it changes
+    /// nothing: the planes are not the world's body.
+    #[serde(default = "default_true")]
+    pub collide: bool,
+    /// `revolute` and `prismatic` only: the coordinate's limits `[lower,
+    /// upper]` (rad for a hinge, within [-pi, pi]; m for a slider), with
+    /// `lower < upper`; the coordinate is 0 at t = 0 (MuJoCo's `range`,
+    /// URDF's `<limit lower upper>`). Held by unilateral rows, each with
+    /// its own stabilisation, as contacts are.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub range: Option<[f64; 2]>,
+    /// Newton restitution of a limit hit, in [0, 1] (0: the coordinate
+    /// stops at the limit); only with `range`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limit_restitution: Option<f64>,
+    /// `revolute` and `prismatic` only: a velocity motor (Rapier's and
+    /// ODE's joint motor, MuJoCo's velocity actuator with a force range).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motor: Option<MotorDesc>,
+}
+
+/// A joint motor: drives the coordinate's rate to `speed` with an effort of
+/// at most `max_effort`, one bounded row (`|p| <= max_effort h`).
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MotorDesc {
+    /// The target rate (rad/s for a hinge, m/s for a slider); a
+    /// controller may change it.
+    pub speed: f64,
+    /// The largest torque (N m) or force (N) the motor gives, > 0.
+    pub max_effort: f64,
+}
+
+impl JointKind {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            JointKind::Spherical => "spherical",
+            JointKind::Revolute => "revolute",
+            JointKind::Fixed => "fixed",
+            JointKind::Prismatic => "prismatic",
+        }
+    }
+}

@@ -1,0 +1,70 @@
+use super::*;
+
+const MINIMAL: &str = r#"
+[sim]
+dt = 0.001
+duration = 1.0
+
+[[body]]
+name = "ball"
+radius = 0.1
+mass = 1.0
+position = [0.0, 0.0, 0.5]
+"#;
+
+#[test]
+fn minimal_scene_loads_with_defaults() {
+    let s = Scene::parse(MINIMAL, "t.toml").expect("valid");
+    assert_eq!(s.sim.friction_directions, 8);
+    assert_eq!(s.sim.gravity, [0.0, 0.0, -9.81]);
+    assert_eq!(s.bodies[0].orientation, [1.0, 0.0, 0.0, 0.0]);
+    assert_eq!(s.step_count(), 1000);
+    // Written out and read back, it is the same scene.
+    assert_eq!(Scene::parse(&s.to_toml(), "again.toml"), Ok(s));
+}
+
+#[test]
+fn pgs_stopping_rule_is_read_and_checked() {
+    let with =
+        |table: &str| MINIMAL.replace("\n[[body]]", &format!("\n[sim.pgs]\n{table}\n\n[[body]]"));
+    let s = Scene::parse(&with("stop = \"residual\"\ntolerance = 0.01"), "t.toml").expect("valid");
+    let pgs = s.sim.pgs.expect("read");
+    assert_eq!((pgs.stop, pgs.tolerance), (PgsStop::Residual, 0.01));
+    assert_eq!(pgs.max_iterations, 5000);
+    assert_eq!(Scene::parse(&s.to_toml(), "again.toml"), Ok(s));
+    let e = Scene::parse(&with("tolerance = -1.0"), "t.toml").unwrap_err();
+    assert_eq!(e.field, "sim.pgs.tolerance", "{e}");
+    let e = Scene::parse(&with("max_iterations = 0"), "t.toml").unwrap_err();
+    assert_eq!(e.field, "sim.pgs.max_iterations", "{e}");
+    let e = Scene::parse(&with("stop = \"sometimes\""), "t.toml").unwrap_err();
+    assert!(e.to_string().contains("sometimes"), "{e}");
+}
+
+#[test]
+fn circular_cone_needs_pgs() {
+    let text = MINIMAL.replace(
+        "duration = 1.0",
+        "duration = 1.0\nfriction_cone = \"circular\"",
+    );
+    let e = Scene::parse(&text, "t.toml").unwrap_err();
+    assert_eq!(e.field, "sim.friction_cone", "{e}");
+    let ok = text.replace("friction_cone", "solver = \"pgs\"\nfriction_cone");
+    assert!(Scene::parse(&ok, "t.toml").is_ok());
+}
+
+#[test]
+fn syntax_error_has_line_and_field() {
+    let text = MINIMAL.replace("mass = 1.0", "mass = 1.0.0");
+    let e = Scene::parse(&text, "t.toml").unwrap_err();
+    assert_eq!(e.location.map(|l| l.0), Some(9), "{e}");
+    assert_eq!(e.field, "body[0].mass", "{e}");
+}
+
+#[test]
+fn unknown_field_is_named() {
+    let text = MINIMAL.replace("mass = 1.0", "mass = 1.0\nmas = 2.0");
+    let e = Scene::parse(&text, "t.toml").unwrap_err();
+    assert!(e.to_string().contains("mas"), "{e}");
+    assert_eq!(e.location.map(|l| l.0), Some(10), "{e}");
+    assert_eq!(e.field, "body[0].mas", "{e}");
+}

@@ -1,0 +1,377 @@
+//! Validation: every field of a parsed scene checked, the error naming it.
+
+use super::*;
+
+impl Scene {
+    pub fn validate(&self, file: &str) -> Result<(), SceneError> {
+        let err = |field: String, message: String| SceneError {
+            file: file.to_string(),
+            location: None,
+            field,
+            message,
+        };
+        let sim = &self.sim;
+        positive(sim.dt).map_err(|m| err("sim.dt".into(), m))?;
+        match (sim.duration, sim.steps) {
+            (Some(_), Some(_)) => {
+                return Err(err(
+                    "sim.steps".into(),
+                    "give either sim.duration or sim.steps, not both".into(),
+                ))
+            }
+            (None, None) => {
+                return Err(err(
+                    "sim.duration".into(),
+                    "missing: give sim.duration (seconds) or sim.steps".into(),
+                ))
+            }
+            (Some(t), None) => positive(t).map_err(|m| err("sim.duration".into(), m))?,
+            (None, Some(0)) => {
+                return Err(err("sim.steps".into(), "= 0: must be at least 1".into()))
+            }
+            (None, Some(_)) => {}
+        }
+        finite3(&sim.gravity).map_err(|m| err("sim.gravity".into(), m))?;
+        if !(3..=64).contains(&sim.friction_directions) {
+            return Err(err(
+                "sim.friction_directions".into(),
+                format!(
+                    "= {}: must be between 3 and 64 (an even number keeps straight sliding exact)",
+                    sim.friction_directions
+                ),
+            ));
+        }
+        if sim.friction_cone == FrictionCone::Circular && sim.solver != SolverChoice::Pgs {
+            return Err(err(
+                "sim.friction_cone".into(),
+                format!(
+                    "= \"circular\" needs solver = \"pgs\" (solver is {:?}): Lemke's LCP has the polyhedral cone",
+                    sim.solver.as_str()
+                ),
+            ));
+        }
+        if !(sim.beta.is_finite() && sim.beta > 0.0 && sim.beta <= 1.0) {
+            return Err(err(
+                "sim.beta".into(),
+                format!("= {}: must lie in (0, 1]", sim.beta),
+            ));
+        }
+        nonneg(sim.restitution_threshold)
+            .map_err(|m| err("sim.restitution_threshold".into(), m))?;
+        nonneg(sim.contact_margin).map_err(|m| err("sim.contact_margin".into(), m))?;
+        if let Some(sleep) = &sim.sleep {
+            nonneg(sleep.after).map_err(|m| err("sim.sleep.after".into(), m))?;
+            positive(sleep.linear_speed).map_err(|m| err("sim.sleep.linear_speed".into(), m))?;
+            positive(sleep.angular_speed).map_err(|m| err("sim.sleep.angular_speed".into(), m))?;
+        }
+        if let Some(pgs) = &sim.pgs {
+            positive(pgs.tolerance).map_err(|m| err("sim.pgs.tolerance".into(), m))?;
+            if pgs.max_iterations == 0 {
+                return Err(err(
+                    "sim.pgs.max_iterations".into(),
+                    "= 0: must be at least 1".into(),
+                ));
+            }
+        }
+
+        // (name, field that first used it), to refuse duplicates by name.
+        let mut names: Vec<(String, String)> = Vec::new();
+        let mut claim = |name: &str, field: String| -> Result<(), SceneError> {
+            if name.trim().is_empty() {
+                return Err(err(field, "is empty: every object needs a name".into()));
+            }
+            if name == WORLD {
+                return Err(err(
+                    field,
+                    format!("= {name:?}: the name {WORLD:?} is reserved for the fixed world"),
+                ));
+            }
+            if let Some((_, first)) = names.iter().find(|(n, _)| n == name) {
+                return Err(err(
+                    field,
+                    format!("= {name:?}: duplicate name, already used by {first}"),
+                ));
+            }
+            names.push((name.to_string(), field));
+            Ok(())
+        };
+
+        for (i, b) in self.bodies.iter().enumerate() {
+            claim(&b.name, format!("body[{i}].name"))?;
+            let f = |k: &str| format!("body {:?}.{k}", b.name);
+            match b.shape_or_error().map_err(|(k, m)| err(f(k), m))? {
+                ShapeDesc::Sphere { radius } => {
+                    positive(radius).map_err(|m| err(f("radius"), m))?;
+                }
+                ShapeDesc::Capsule {
+                    radius,
+                    half_length,
+                } => {
+                    positive(radius).map_err(|m| err(f("radius"), m))?;
+                    positive(half_length).map_err(|m| err(f("half_length"), m))?;
+                }
+                ShapeDesc::Box { half_extents } => {
+                    if half_extents.iter().any(|&h| positive(h).is_err()) {
+                        return Err(err(
+                            f("half_extents"),
+                            format!(
+                                "= {half_extents:?}: each half extent must be a positive \
+                                 finite number"
+                            ),
+                        ));
+                    }
+                }
+            }
+            positive(b.mass).map_err(|m| err(f("mass"), m))?;
+            if let Some(j) = b.inertia {
+                // Positive definite: the leading minors of the symmetric
+                // matrix are positive (Sylvester).
+                let [xx, yy, zz, xy, xz, yz] = j;
+                let minors = [
+                    xx,
+                    xx * yy - xy * xy,
+                    xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz),
+                ];
+                if !j.iter().all(|x| x.is_finite()) || minors.iter().any(|&m| m <= 0.0) {
+                    return Err(err(
+                        f("inertia"),
+                        format!(
+                            "= {j:?}: [ixx, iyy, izz, ixy, ixz, iyz] must be finite and \
+                             positive definite"
+                        ),
+                    ));
+                }
+            }
+            finite3(&b.position).map_err(|m| err(f("position"), m))?;
+            finite3(&b.velocity).map_err(|m| err(f("velocity"), m))?;
+            finite3(&b.angular_velocity).map_err(|m| err(f("angular_velocity"), m))?;
+            finite3(&b.force).map_err(|m| err(f("force"), m))?;
+            unit_quaternion(&b.orientation).map_err(|m| err(f("orientation"), m))?;
+            nonneg(b.friction).map_err(|m| err(f("friction"), m))?;
+            unit_interval(b.restitution).map_err(|m| err(f("restitution"), m))?;
+        }
+        for (i, p) in self.planes.iter().enumerate() {
+            claim(&p.name, format!("plane[{i}].name"))?;
+            let f = |k: &str| format!("plane {:?}.{k}", p.name);
+            finite3(&p.normal).map_err(|m| err(f("normal"), m))?;
+            finite3(&p.point).map_err(|m| err(f("point"), m))?;
+            let len2: f64 = p.normal.iter().map(|x| x * x).sum();
+            if len2 <= 1e-24 {
+                return Err(err(
+                    f("normal"),
+                    format!("= {:?}: a plane's normal must not be zero", p.normal),
+                ));
+            }
+            nonneg(p.friction).map_err(|m| err(f("friction"), m))?;
+            unit_interval(p.restitution).map_err(|m| err(f("restitution"), m))?;
+        }
+        for (i, j) in self.joints.iter().enumerate() {
+            claim(&j.name, format!("joint[{i}].name"))?;
+            let f = |k: &str| format!("joint {:?}.{k}", j.name);
+            for (key, body) in [("body_a", &j.body_a), ("body_b", &j.body_b)] {
+                if body != WORLD && !self.bodies.iter().any(|b| &b.name == body) {
+                    let known: Vec<&str> = self.bodies.iter().map(|b| b.name.as_str()).collect();
+                    return Err(err(
+                        f(key),
+                        format!(
+                            "= {body:?}: unknown body (known: \"world\", {})",
+                            known
+                                .iter()
+                                .map(|n| format!("{n:?}"))
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                    ));
+                }
+            }
+            if j.body_a == j.body_b {
+                return Err(err(
+                    f("body_b"),
+                    format!("= {:?}: a joint needs two different bodies", j.body_b),
+                ));
+            }
+            finite3(&j.anchor).map_err(|m| err(f("anchor"), m))?;
+            finite3(&j.torque).map_err(|m| err(f("torque"), m))?;
+            match (j.kind, j.force) {
+                (JointKind::Prismatic, Some(force)) => {
+                    finite3(&force).map_err(|m| err(f("force"), m))?
+                }
+                (kind, Some(_)) => {
+                    return Err(err(
+                        f("force"),
+                        format!(
+                            "only a prismatic joint has a force (this one is {}: its effort is a torque)",
+                            kind.as_str()
+                        ),
+                    ))
+                }
+                (_, None) => {}
+            }
+            if j.kind == JointKind::Prismatic && j.torque != [0.0; 3] {
+                return Err(err(
+                    f("torque"),
+                    "a prismatic joint's effort is a force: give `force`".into(),
+                ));
+            }
+            match (j.kind, j.range) {
+                (JointKind::Revolute | JointKind::Prismatic, Some([lo, hi])) => {
+                    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                        return Err(err(
+                            f("range"),
+                            format!("= [{lo}, {hi}]: needs finite bounds with lower < upper"),
+                        ));
+                    }
+                    let pi = std::f64::consts::PI;
+                    if j.kind == JointKind::Revolute && (lo < -pi || hi > pi) {
+                        return Err(err(
+                            f("range"),
+                            format!(
+                                "= [{lo}, {hi}]: a hinge's limits are angles within [-pi, pi] (rad)"
+                            ),
+                        ));
+                    }
+                }
+                (kind, Some(_)) => {
+                    return Err(err(
+                        f("range"),
+                        format!(
+                            "only a revolute or prismatic joint has a range (this one is {})",
+                            kind.as_str()
+                        ),
+                    ))
+                }
+                (_, None) => {}
+            }
+            if let Some(motor) = j.motor {
+                if !matches!(j.kind, JointKind::Revolute | JointKind::Prismatic) {
+                    return Err(err(
+                        f("motor"),
+                        format!(
+                            "only a revolute or prismatic joint has a motor (this one is {})",
+                            j.kind.as_str()
+                        ),
+                    ));
+                }
+                if !motor.speed.is_finite() {
+                    return Err(err(
+                        f("motor.speed"),
+                        format!("= {}: must be finite", motor.speed),
+                    ));
+                }
+                positive(motor.max_effort).map_err(|m| err(f("motor.max_effort"), m))?;
+            }
+            if let Some(e) = j.limit_restitution {
+                if j.range.is_none() {
+                    return Err(err(
+                        f("limit_restitution"),
+                        "a limit's restitution needs the joint's `range`".into(),
+                    ));
+                }
+                unit_interval(e).map_err(|m| err(f("limit_restitution"), m))?;
+            }
+            match (j.kind, j.axis) {
+                (kind @ (JointKind::Revolute | JointKind::Prismatic), None) => {
+                    return Err(err(
+                        f("axis"),
+                        format!("missing: a {} joint needs its axis", kind.as_str()),
+                    ))
+                }
+                (JointKind::Revolute | JointKind::Prismatic, Some(a)) => {
+                    finite3(&a).map_err(|m| err(f("axis"), m))?;
+                    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+                    if !(n > 1e-9 && n.is_finite()) {
+                        return Err(err(
+                            f("axis"),
+                            format!("= {a:?}: the axis needs a direction (not zero)"),
+                        ));
+                    }
+                }
+                (kind, Some(_)) => {
+                    return Err(err(
+                        f("axis"),
+                        format!(
+                            "only a revolute or prismatic joint has an axis (this one is {})",
+                            kind.as_str()
+                        ),
+                    ))
+                }
+                (_, None) => {}
+            }
+        }
+        if let Some(c) = &self.compliance {
+            for (what, spring) in [("contact", c.contact), ("joint", c.joint)] {
+                if let Some(k) = spring {
+                    positive(k.stiffness)
+                        .map_err(|m| err(format!("compliance.{what}.stiffness"), m))?;
+                    nonneg(k.damping).map_err(|m| err(format!("compliance.{what}.damping"), m))?;
+                }
+            }
+        }
+        if let Some(c) = &self.camera {
+            if let Some(d) = &c.direction {
+                finite3(d).map_err(|m| err("camera.direction".into(), m))?;
+                if d.iter().map(|x| x * x).sum::<f64>() <= 1e-24 {
+                    return Err(err(
+                        "camera.direction".into(),
+                        format!("= {d:?}: must not be zero"),
+                    ));
+                }
+            }
+            if let Some(t) = &c.target {
+                finite3(t).map_err(|m| err("camera.target".into(), m))?;
+            }
+            if let Some(w) = c.width {
+                positive(w).map_err(|m| err("camera.width".into(), m))?;
+            }
+        }
+        Ok(())
+    }
+}
+
+fn positive(x: f64) -> Result<(), String> {
+    if x.is_finite() && x > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("= {x}: must be a positive finite number"))
+    }
+}
+
+fn nonneg(x: f64) -> Result<(), String> {
+    if x.is_finite() && x >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!("= {x}: must be a finite number >= 0"))
+    }
+}
+
+fn unit_interval(x: f64) -> Result<(), String> {
+    if x.is_finite() && (0.0..=1.0).contains(&x) {
+        Ok(())
+    } else {
+        Err(format!("= {x}: must lie in [0, 1]"))
+    }
+}
+
+fn finite3(v: &[f64; 3]) -> Result<(), String> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(format!("= {v:?}: every component must be finite"))
+    }
+}
+
+/// Refuses a quaternion that is not unit length rather than normalising it
+/// silently: a typo in one component would otherwise become a different,
+/// plausible-looking orientation.
+fn unit_quaternion(q: &[f64; 4]) -> Result<(), String> {
+    if !q.iter().all(|x| x.is_finite()) {
+        return Err(format!("= {q:?}: every component must be finite"));
+    }
+    let norm = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if (norm - 1.0).abs() > 1e-6 {
+        return Err(format!(
+            "= {q:?}: not a unit quaternion (norm {norm}); give [w, x, y, z] with norm 1"
+        ));
+    }
+    Ok(())
+}
