@@ -19,7 +19,7 @@ log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 set +e
 echo "== cargo test --release --workspace $*"
-cargo test --release --workspace "$@" 2>&1 | tee "$log"
+cargo test --release --workspace --no-fail-fast "$@" 2>&1 | tee "$log"
 status=${PIPESTATUS[0]}
 if [ "$#" -eq 0 ]; then
     echo "== the analytic engine tests again, with the iterative solver (prox PGS)"

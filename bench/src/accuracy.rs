@@ -170,8 +170,7 @@ fn engine(model: Model, setting: &Setting) -> Engine {
         e.set_pgs_params(PgsParams {
             tolerance: setting.tolerance,
             // The setting names the relative residual: that rule alone.
-            velocity_tolerance: 0.0,
-            ..PgsParams::default()
+            ..PgsParams::distance(0.0)
         });
     }
     e

@@ -9,7 +9,7 @@ use crate::robust::Rng;
 use crate::text::{joint, plane, sphere};
 use cosim_engine::solver::PgsParams;
 use cosim_shared::scene::SleepDesc;
-use cosim_shared::Scene;
+use cosim_shared::{Scene, SolverChoice};
 
 /// Sphere radius (m) of the pile.
 pub const RADIUS: f64 = 0.05;
@@ -67,12 +67,10 @@ pub fn half_width(n: usize) -> f64 {
     Shape::Cube.half_width(n)
 }
 
-/// A pile's stopping rule for PGS: the constraint violation within 1 cm/s,
-/// 0.1 mm of position per step at h = 0.01 that the stabilisation takes
-/// back. Measured (`bench pile --n 1000 --steps 150`): 10.9 ms per step
-/// (median), worst overlap 0.063 mm, no step at the cap; the distance
-/// rule at 1e-3 m/s took thousands of sweeps a step once the pile settled.
-pub const TOLERANCE: f64 = 1e-2;
+/// The stopping rule's tolerance (m/s) the pile runs at: the scene
+/// default (`cosim_shared::DEFAULT_PGS_TOLERANCE`, the residual rule),
+/// which was chosen on this pile.
+pub const TOLERANCE: f64 = cosim_shared::DEFAULT_PGS_TOLERANCE;
 
 /// The pile's rule at `tolerance` as the engine takes it ([`TOLERANCE`]
 /// in the pile scene; `bench pile --velocity-tolerance` and the peers
@@ -88,11 +86,20 @@ pub fn pgs(tolerance: f64) -> PgsParams {
 /// The scene text of a pile of `n` spheres, with step `dt` and friction
 /// directions `nd`, solver `solver` (`"pgs"`, `"lemke"`, `"auto"`).
 pub fn text(n: usize, dt: f64, nd: usize, solver: &str, steps: u64, seed: u64) -> String {
-    text_shaped(n, Shape::Cube, dt, nd, solver, steps, seed, None)
+    text_shaped(
+        n,
+        Shape::Cube,
+        dt,
+        nd,
+        solver,
+        steps,
+        seed,
+        SleepDesc::default(),
+    )
 }
 
-/// [`text`] laid out as `shape` says, with sleeping at `sleep`'s
-/// thresholds when given.
+/// [`text`] laid out as `shape` says, with sleeping as `sleep` says. What
+/// is at its default is left out of the text, as a user writes a scene.
 #[allow(clippy::too_many_arguments)]
 pub fn text_shaped(
     n: usize,
@@ -102,21 +109,26 @@ pub fn text_shaped(
     solver: &str,
     steps: u64,
     seed: u64,
-    sleep: Option<SleepDesc>,
+    sleep: SleepDesc,
 ) -> String {
     let (side, _) = shape.grid(n);
     let w = shape.half_width(n);
     let mut rng = Rng::new(seed);
     let mut t = format!(
-        "[sim]\nname = \"pile-{n}\"\ndt = {dt:e}\nsteps = {steps}\nfriction_directions = {nd}\nsolver = \"{solver}\"\n\n"
+        "[sim]\nname = \"pile-{n}\"\ndt = {dt:e}\nsteps = {steps}\nfriction_directions = {nd}\n"
     );
-    if let Some(s) = sleep {
+    if solver != SolverChoice::default().as_str() {
+        t += &format!("solver = \"{solver}\"\n");
+    }
+    t += "\n";
+    if !sleep.enabled {
+        t += "[sim.sleep]\nenabled = false\n\n";
+    } else if sleep != SleepDesc::default() {
         t += &format!(
             "[sim.sleep]\nafter = {:e}\nlinear_speed = {:e}\nangular_speed = {:e}\n\n",
-            s.after, s.linear_speed, s.angular_speed
+            sleep.after, sleep.linear_speed, sleep.angular_speed
         );
     }
-    t += &format!("[sim.pgs]\nstop = \"residual\"\ntolerance = {TOLERANCE:e}\n\n");
     t += &plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.5, 0.0);
     for (i, (nx, ny)) in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
         .into_iter()
@@ -178,8 +190,8 @@ pub struct Settings {
     pub seed: u64,
     /// Print every `trace`-th step's report (0: none).
     pub trace: u64,
-    /// Islands at rest sleep at these thresholds (`[sim.sleep]`).
-    pub sleep: Option<SleepDesc>,
+    /// Sleeping (`[sim.sleep]`): on at its defaults unless set.
+    pub sleep: SleepDesc,
     pub shape: Shape,
     /// A pendulum swings above the pile ([`pendulum`]): a body that never
     /// sleeps beside a pile that does, as a robot's links beside a heap.
@@ -335,12 +347,13 @@ pub fn run(n: usize, settings: &Settings) -> Outcome {
 pub fn table(rows: &[Outcome], settings: &Settings) -> String {
     let (dt, solver) = (settings.dt, &settings.solver);
     let (stop, tol) = (settings.pgs.stop, settings.pgs.velocity_tolerance);
-    let sleep = match settings.sleep {
-        Some(s) => format!(
+    let s = settings.sleep;
+    let sleep = match s.enabled {
+        true => format!(
             "sleeping on ({} m/s, {} rad/s, {} s)",
             s.linear_speed, s.angular_speed, s.after
         ),
-        None => "sleeping off".into(),
+        false => "sleeping off".into(),
     };
     let shape = settings.shape;
     let pendulum = match settings.pendulum {
@@ -399,7 +412,7 @@ mod tests {
             (100, Shape::Layers(3)),
             (4000, Shape::Layers(10)),
         ] {
-            let text = text_shaped(n, shape, 0.01, 4, "pgs", 10, 1, None);
+            let text = text_shaped(n, shape, 0.01, 4, "pgs", 10, 1, SleepDesc::off());
             let s = Scene::parse(&text, "<pile>").expect("valid");
             assert_eq!(s.bodies.len(), n);
             let w = shape.half_width(n);

@@ -80,6 +80,13 @@ pub enum Command {
         /// --mcap` does.
         #[arg(long)]
         mcap: bool,
+        /// Keep every frame: join the lockstep as a controller that sends
+        /// no input, so that the server waits for the recorder each step
+        /// (it counts among the server's controllers, with its deadline and
+        /// miss policy). Without it the recorder reads as a monitor, never
+        /// slows the server, and says how many frames it missed.
+        #[arg(long)]
+        lockstep: bool,
     },
     /// The PD controller of the reference scene (see `cosim_client::pd`).
     Pd {
@@ -193,9 +200,26 @@ fn execute(cli: &Cli) -> Result<(), Box<dyn std::error::Error>> {
                 stats.frames, stats.sent, stats.dropped
             );
         }
-        Command::Record { out, frames, mcap } => {
-            let n = record(name, out, *frames, *mcap)?;
-            println!("recorded {n} frames into {}", out.display());
+        Command::Record {
+            out,
+            frames,
+            mcap,
+            lockstep,
+        } => {
+            let r = record(name, out, *frames, *mcap, *lockstep)?;
+            println!(
+                "recorded {} frames into {} (steps {}..{}){}",
+                r.frames,
+                out.display(),
+                r.first.unwrap_or(0),
+                r.last.unwrap_or(0),
+                match r.dropped {
+                    0 => String::new(),
+                    d => format!(
+                        "; {d} frames were overwritten before they were read (--lockstep keeps every frame)"
+                    ),
+                }
+            );
         }
         Command::Pd {
             elevation,
@@ -299,19 +323,36 @@ fn monitor(name: &str, seconds: Option<f64>) -> Result<(), ClientError> {
 
 /// Writes the frames as `run` writes its files (and, with `mcap`,
 /// `recording.mcap`); returns the frame count.
+/// What a recording holds: its frames, the steps of the first and last,
+/// and the frames the server overwrote before the recorder read them.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Recorded {
+    pub frames: u64,
+    pub first: Option<u64>,
+    pub last: Option<u64>,
+    pub dropped: u64,
+}
+
 pub fn record(
     name: &str,
     out: &Path,
     frames: Option<u64>,
     mcap: bool,
-) -> Result<u64, Box<dyn std::error::Error>> {
+    lockstep: bool,
+) -> Result<Recorded, Box<dyn std::error::Error>> {
     let conn = Connection::connect(name)?;
     let toml = conn.scene_toml()?;
     let scene = cosim_shared::Scene::parse(&toml, "<server scene>")?;
-    let m = Monitor::open(name, crate::services::MAX_STATE_BUFFER)?;
     std::fs::create_dir_all(out)?;
     std::fs::write(out.join("scene.toml"), &toml)?;
     let mut rec = Recorder::create(out, scene, mcap)?;
+    if lockstep {
+        let r = record_lockstep(name, &mut rec, frames)?;
+        rec.finish()?;
+        return Ok(r);
+    }
+    let m = Monitor::open(name, crate::services::MAX_STATE_BUFFER)?;
+    let mut r = Recorded::default();
     let mut count = 0u64;
     let mut last_seq = None;
     let mut dropped = 0u64;
@@ -337,6 +378,8 @@ pub fn record(
         }
         last_seq = Some(f.sequence);
         rec.frame(&f)?;
+        r.first.get_or_insert(f.step);
+        r.last = Some(f.step);
         count += 1;
         if f.status & STATUS_SHUTDOWN != 0 {
             break;
@@ -346,10 +389,61 @@ pub fn record(
         }
     }
     rec.finish()?;
-    if dropped > 0 {
-        eprintln!("warning: {dropped} frames were overwritten before they could be read");
+    r.frames = count;
+    r.dropped = dropped;
+    Ok(r)
+}
+
+/// `record --lockstep`: every frame, as a controller that answers each
+/// with no input (the server waits for it as for any controller).
+fn record_lockstep(
+    name: &str,
+    rec: &mut Recorder,
+    frames: Option<u64>,
+) -> Result<Recorded, Box<dyn std::error::Error>> {
+    let mut c = Controller::join(name, WaitMode::Hybrid)?;
+    let mut r = Recorded::default();
+    let mut input = InputFrame::default();
+    loop {
+        if frames.is_some_and(|n| r.frames >= n) {
+            break;
+        }
+        let f = match c.next_state_ref(Duration::from_millis(500)) {
+            Ok(f) => f,
+            Err(ClientError::Timeout { .. }) => continue,
+            // The last frame, with the final state.
+            Err(ClientError::Shutdown) => {
+                if let Some(f) = c.last_state() {
+                    rec.frame(f)?;
+                    r.first.get_or_insert(f.step);
+                    r.last = Some(f.step);
+                    r.frames += 1;
+                }
+                break;
+            }
+            Err(ClientError::Interrupted) => break,
+            Err(ClientError::ServerGone { name }) => {
+                eprintln!(
+                    "warning: the server '{name}' is gone; the recording ends at frame {}",
+                    r.frames
+                );
+                break;
+            }
+            Err(e) => return Err(e.into()),
+        };
+        rec.frame(f)?;
+        r.first.get_or_insert(f.step);
+        r.last = Some(f.step);
+        r.frames += 1;
+        if r.frames.is_multiple_of(1000) {
+            rec.flush()?;
+        }
+        c.send_ref(&mut input)?;
     }
-    Ok(count)
+    if frames.is_some() {
+        let _ = c.leave();
+    }
+    Ok(r)
 }
 
 /// The CSV files of a recording, in the formats of `cosim-server run`.

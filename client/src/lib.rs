@@ -134,7 +134,7 @@ impl fmt::Display for ClientError {
         match self {
             ClientError::NoServer { name } => write!(
                 f,
-                "no cosim server named '{name}' is running (start one with `cosim-server serve --name {name}`; `cosim list` shows the running ones)"
+                "no cosim server named '{name}' is running (start one that waits for a controller: `cosim-server serve --name {name} --controllers 1`; `cosim list` shows the running ones)"
             ),
             ClientError::Ipc { what, detail } => write!(f, "{what}: {detail}"),
             ClientError::Timeout { what, after } => {

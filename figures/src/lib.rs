@@ -258,11 +258,17 @@ pub fn subtitle(scene: &Scene) -> String {
 /// Draws the figures (into `DIR/plots/`) and the animation
 /// (`DIR/animation.gif`) of the run in `dir`; returns the files written.
 pub fn render(dir: &Path, opts: &PlotOptions) -> Result<Vec<PathBuf>, PlotError> {
+    render_into(dir, dir, opts)
+}
+
+/// [`render`] into `out` (its `plots/`, `animation.gif` and stills)
+/// instead of the run's folder.
+pub fn render_into(dir: &Path, out: &Path, opts: &PlotOptions) -> Result<Vec<PathBuf>, PlotError> {
     ensure_font()?;
     let full = data::RunData::load(dir)?;
     let mut files = Vec::new();
     if opts.figures {
-        let plots = dir.join("plots");
+        let plots = out.join("plots");
         std::fs::create_dir_all(&plots)
             .map_err(|e| PlotError::Draw(format!("{}: {e}", plots.display())))?;
         let run = opts.focus(full.clone())?;
@@ -284,7 +290,7 @@ pub fn render(dir: &Path, opts: &PlotOptions) -> Result<Vec<PathBuf>, PlotError>
             )));
         }
         if opts.animation {
-            let path = dir.join("animation.gif");
+            let path = out.join("animation.gif");
             let fps = opts.fps.unwrap_or(animation::FPS);
             animation::gif_at(&model, scene.camera.as_ref(), &run, &path, fps, gif_size)?;
             files.push(path);
@@ -294,7 +300,7 @@ pub fn render(dir: &Path, opts: &PlotOptions) -> Result<Vec<PathBuf>, PlotError>
                 &model,
                 scene.camera.as_ref(),
                 &run,
-                dir,
+                out,
                 "frame",
                 opts.stills,
                 gif_size,

@@ -91,7 +91,8 @@ def _open(name: str, what: str, open_fn):
         if "DoesNotExist" in repr(e) or "DoesNotExist" in str(e):
             raise NoServer(
                 f"no cosim server named '{name}' is running "
-                f"(start one with `cosim-server serve --name {name}`)"
+                f"(start one that waits for a controller: "
+                f"`cosim-server serve --name {name} --controllers 1`)"
             ) from None
         raise CosimError(f"cannot open cosim/{name}/{what}: {e}") from e
 

@@ -10,4 +10,5 @@ pub mod corpus;
 pub use cosim_engine as engine;
 pub mod fuzz;
 pub mod output;
+pub mod progress;
 pub mod serve;

@@ -10,6 +10,41 @@ use std::path::{Path, PathBuf};
 
 pub use cosim_shared::num;
 pub use cosim_shared::{IMPULSES_HEADER, JOINTS_HEADER, STATES_HEADER};
+
+/// Whether `dir` holds a run's files already.
+pub fn holds_run(dir: &Path) -> bool {
+    ["summary.json", "states.csv", "replay.csv"]
+        .iter()
+        .any(|f| dir.join(f).exists())
+}
+
+/// Where a run writes. A folder given (`--out`) that holds a run is
+/// refused unless `overwrite`; the default folder, when it holds one,
+/// gives way to the first free `NAME-2`, `NAME-3`, ... beside it, so that
+/// two runs never write into one folder unasked.
+pub fn run_folder(
+    given: Option<&Path>,
+    default: PathBuf,
+    overwrite: bool,
+) -> Result<PathBuf, String> {
+    if let Some(dir) = given {
+        if holds_run(dir) && !overwrite {
+            return Err(format!(
+                "{} holds an earlier run; choose another --out, or add --overwrite",
+                dir.display()
+            ));
+        }
+        return Ok(dir.to_path_buf());
+    }
+    if overwrite || !holds_run(&default) {
+        return Ok(default);
+    }
+    let base = default.as_os_str().to_string_lossy().into_owned();
+    (2..)
+        .map(|k| PathBuf::from(format!("{base}-{k}")))
+        .find(|d| !holds_run(d))
+        .ok_or_else(|| format!("no free folder beside {base}"))
+}
 pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw,projected,rung,refined,fallback,compliance,energy_refused,islands,largest_island,sleeping,lemke_islands,pgs_islands,max_joint_angle_error,left_out";
 
 /// The CSV files of a run.

@@ -372,3 +372,34 @@ fn joints_csv_gives_a_hinges_angle_as_the_states_show_it() {
         );
     }
 }
+
+/// Issue 46, point 4: two runs never write into one folder unasked. A
+/// second run into an `--out` that holds a run is refused (exit 2, the
+/// folder named) and leaves it as it was; `--overwrite` replaces it; the
+/// default folder gives way to `NAME-2` beside it.
+#[test]
+fn a_second_run_into_an_occupied_folder_is_refused_or_gets_its_own() {
+    let tmp = TempDir::new("occupied");
+    let out = tmp.path().join("run");
+    let o = out.to_str().unwrap();
+    run_ok(&["run", "--steps", "20", "--quiet", "--out", o]);
+    let before = std::fs::read(out.join("states.csv")).unwrap();
+    let second = run(&["run", "--steps", "30", "--quiet", "--out", o]);
+    assert_eq!(second.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert!(err.contains(o) && err.contains("--overwrite"), "{err}");
+    assert_eq!(std::fs::read(out.join("states.csv")).unwrap(), before);
+    run_ok(&["run", "--steps", "30", "--quiet", "--out", o, "--overwrite"]);
+    assert_ne!(std::fs::read(out.join("states.csv")).unwrap(), before);
+    // The default folder, out/<scene>, from the working directory.
+    for _ in 0..2 {
+        let r = Command::new(BIN)
+            .args(["run", "--steps", "20"])
+            .current_dir(tmp.path())
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "{r:?}");
+    }
+    assert!(tmp.path().join("out/reference/summary.json").exists());
+    assert!(tmp.path().join("out/reference-2/summary.json").exists());
+}

@@ -448,8 +448,11 @@ fn two_runs_overlay_in_the_chosen_figures_and_window() {
         .status()
         .unwrap();
     assert!(status.success());
+    // A subset goes beside the run's own figures (issue 46: a window
+    // drew over them), into A/focus/.
+    assert!(!a.join("plots").exists());
     let texts = |f: &str| {
-        std::fs::read_to_string(a.join("plots").join(f))
+        std::fs::read_to_string(a.join("focus").join("plots").join(f))
             .unwrap()
             .lines()
             .map(|l| l.trim().to_string())
@@ -476,7 +479,7 @@ fn two_runs_overlay_in_the_chosen_figures_and_window() {
     contacts.sort();
     contacts.dedup();
     assert!(contacts.len() >= 2, "{contacts:?}");
-    let png = image::open(a.join("plots/normal_forces.png")).unwrap();
+    let png = image::open(a.join("focus/plots/normal_forces.png")).unwrap();
     assert_eq!(png.height(), 200 + 260 * contacts.len() as u32);
     let unknown = Command::new(BIN)
         .arg("plot")

@@ -29,10 +29,18 @@ pub fn solver() -> String {
 }
 
 /// `[sim]` header with the given step and gravity.
+/// With `pgs`, the distance rule at 1e-6 m/s (not the default residual
+/// rule at 1e-2, a pile's): the analytic tolerances are Lemke's.
 pub fn sim(dt: f64, steps: u64, gravity: [f64; 3]) -> String {
+    let solver = solver();
+    let pgs = if solver == "pgs" {
+        "pgs = { stop = \"distance\", tolerance = 1e-6 }\n"
+    } else {
+        ""
+    };
     format!(
-        "[sim]\ndt = {dt:e}\nsteps = {steps}\ngravity = [{:e}, {:e}, {:e}]\nfriction_directions = 8\nsolver = \"{}\"\n",
-        gravity[0], gravity[1], gravity[2], solver()
+        "[sim]\ndt = {dt:e}\nsteps = {steps}\ngravity = [{:e}, {:e}, {:e}]\nfriction_directions = 8\nsolver = \"{solver}\"\n{pgs}",
+        gravity[0], gravity[1], gravity[2]
     )
 }
 

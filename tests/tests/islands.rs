@@ -89,9 +89,10 @@ fn island_b(side: usize) -> String {
     text
 }
 
+/// Sleeping off: these tests count the islands every step solves.
 fn engine(solver: &str, bodies: &str) -> Engine {
     let text = format!(
-        "[sim]\nname = \"split\"\ndt = 0.005\nsteps = 10\nsolver = \"{solver}\"\nfriction_directions = 4\n\n{}{}",
+        "[sim]\nname = \"split\"\ndt = 0.005\nsteps = 10\nsolver = \"{solver}\"\nfriction_directions = 4\n\n[sim.sleep]\nenabled = false\n\n{}{}",
         plane("floor", [0.0, 0.0, 1.0], [0.0; 3], 0.5, 0.0),
         bodies
     );

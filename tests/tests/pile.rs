@@ -5,6 +5,7 @@
 //! millimetre, nothing leaves the box, the pile comes to rest.
 
 use cosim_bench::pile::{self, Settings, Shape};
+use cosim_shared::SleepDesc;
 
 /// 500 steps of 10 ms, `auto`, the pile's rule at `tolerance` (m/s).
 fn settings(tolerance: f64) -> Settings {
@@ -15,7 +16,7 @@ fn settings(tolerance: f64) -> Settings {
         pgs: pile::pgs(tolerance),
         seed: 1,
         trace: 0,
-        sleep: None,
+        sleep: SleepDesc::off(),
         shape: Shape::Cube,
         pendulum: false,
     }
@@ -29,7 +30,7 @@ fn a_pile_falls_asleep_whole_beside_a_pendulum_that_never_does() {
         100,
         &Settings {
             steps: 800,
-            sleep: pile::sleep_speeds("0.1,2").ok(),
+            sleep: pile::sleep_speeds("0.1,2").unwrap_or_default(),
             shape: Shape::Layers(10),
             pendulum: true,
             ..settings(1e-2)
@@ -102,7 +103,16 @@ fn a_steps_sweeps_stay_within_the_cap_over_its_re_solves() {
     use cosim_server::engine::solver::PgsParams;
     use cosim_server::engine::{Engine, Model};
     let cap = 2;
-    let text = pile::text_shaped(1000, pile::Shape::Cube, 0.01, 4, "pgs", 200, 1, None);
+    let text = pile::text_shaped(
+        1000,
+        pile::Shape::Cube,
+        0.01,
+        4,
+        "pgs",
+        200,
+        1,
+        SleepDesc::off(),
+    );
     let scene = cosim_shared::Scene::parse(&text, "<pile>").expect("valid scene");
     let mut model = Model::from_scene(&scene);
     model.params.fallback = false;

@@ -116,8 +116,7 @@ fn random_scenes_give_verified_answers_and_pgs_agrees() {
             max_iterations: 20_000,
             // The relative residual alone: this compares answers, not
             // physics to a tolerance in m/s.
-            velocity_tolerance: 0.0,
-            ..PgsParams::default()
+            ..PgsParams::distance(0.0)
         });
         for _ in 0..60 {
             let before = lemke.state().clone();

@@ -61,7 +61,11 @@ fn a_box_rests_on_a_plane_on_four_contacts() {
     let hv = Vector3::from(half);
     let (mut worst_sum, mut worst_moment, mut counts) = (0.0f64, 0.0f64, Vec::new());
     run(&mut e, steps, |e, r| {
-        counts.push(r.contacts_in_lcp);
+        // Asleep (the default sleeping), the box's contacts leave the LCP
+        // and report the impulses they held.
+        if r.sleeping == 0 {
+            counts.push(r.contacts_in_lcp);
+        }
         let (mut sum, mut moment) = (0.0, Vector3::zeros());
         for i in e
             .impulses()

@@ -11,6 +11,8 @@ fn pgs_agrees_with_lemke_on_the_reference_scene() {
     let mut lemke = Engine::new(Model::from_scene(&scene));
     let mut model = Model::from_scene(&scene);
     model.params.solver = SolverChoice::Pgs;
+    // The distance rule: PGS stopped within 1e-6 m/s of its answer.
+    model.params.pgs = cosim_server::engine::solver::PgsParams::distance(1e-6);
     let mut pgs = Engine::new(model);
     let (mut worst, mut compared, mut unconverged) = (0.0f64, 0, 0);
     for _ in 0..2000 {

@@ -81,7 +81,7 @@ fn piles(args: &Args) -> ExitCode {
         pgs: rule(args.ours_tolerances.first().copied().unwrap_or(1e-2)),
         seed: 1,
         trace: 0,
-        sleep: None,
+        sleep: SleepDesc::off(),
         shape: args
             .pile_layers
             .map_or(Shape::Cube, |l| Shape::Layers(l.max(1))),
@@ -91,12 +91,12 @@ fn piles(args: &Args) -> ExitCode {
     for &n in &args.pile {
         if n <= args.ours_up_to {
             for (k, &tolerance) in args.ours_tolerances.iter().enumerate() {
-                let mut sleeps = vec![None];
+                let mut sleeps = vec![SleepDesc::off()];
                 if k == 0 && !args.no_ours_sleep {
-                    sleeps.push(Some(SleepDesc::default()));
+                    sleeps.push(SleepDesc::default());
                 }
-                if k == 0 && args.ours_sleep_speeds.is_some() {
-                    sleeps.push(args.ours_sleep_speeds);
+                if let Some(s) = args.ours_sleep_speeds.filter(|_| k == 0) {
+                    sleeps.push(s);
                 }
                 for sleep in sleeps {
                     let r = pile::ours(

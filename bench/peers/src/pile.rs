@@ -42,9 +42,9 @@ pub fn ours(n: usize, settings: &Settings) -> Row {
             settings.solver,
             settings.pgs.velocity_tolerance,
             match settings.sleep {
-                None => "no sleep".to_string(),
-                Some(s) if s == SleepDesc::default() => "sleep".to_string(),
-                Some(s) => format!("sleep at {} m/s, {} rad/s", s.linear_speed, s.angular_speed),
+                s if !s.enabled => "no sleep".to_string(),
+                s if s == SleepDesc::default() => "sleep".to_string(),
+                s => format!("sleep at {} m/s, {} rad/s", s.linear_speed, s.angular_speed),
             }
         ),
         n,
@@ -68,7 +68,7 @@ pub fn rapier(n: usize, settings: &Settings, iterations: usize, sleep: bool) -> 
         "pgs",
         settings.steps,
         settings.seed,
-        None,
+        SleepDesc::off(),
     );
     let scene = Scene::parse(&text, "<pile>").unwrap_or_else(|e| panic!("pile scene: {e}"));
     let model = Model::from_scene(&scene);

@@ -358,19 +358,27 @@ pub fn detect(
 /// and the live view draw a contact's force from. `None` for a joint
 /// limit's id or a feature the pair does not have in this state.
 pub fn contact_point(model: &Model, state: &State, id: usize) -> Option<Vector3<f64>> {
+    contact_geometry(model, state, id, &mut Vec::new()).map(|g| g.on_a(state))
+}
+
+/// The geometry of potential contact `id` at the state's poses, `found`
+/// the narrow phase's scratch. `None` as for [`contact_point`].
+pub fn contact_geometry(
+    model: &Model,
+    state: &State,
+    id: usize,
+    found: &mut Vec<Geometry>,
+) -> Option<Geometry> {
     if id >= model.potential_contacts() {
         return None;
     }
     let (a, b) = model.contact_bodies(id);
     let feature = model.contact_feature(id);
-    let mut found = Vec::new();
+    found.clear();
     match b {
-        Counterpart::Plane(p) => body_plane(model, state, a, p, f64::INFINITY, &mut found),
-        Counterpart::Body(j) => body_pair(model, state, a, j, f64::INFINITY, &mut found),
+        Counterpart::Plane(p) => body_plane(model, state, a, p, f64::INFINITY, found),
+        Counterpart::Body(j) => body_pair(model, state, a, j, f64::INFINITY, found),
         Counterpart::World => return None,
     }
-    found
-        .iter()
-        .find(|g| g.feature == feature)
-        .map(|g| g.on_a(state))
+    found.iter().find(|g| g.feature == feature).copied()
 }

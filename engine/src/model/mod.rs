@@ -546,10 +546,10 @@ impl Model {
                     .map(Compliance::from),
                 joint_compliance: scene.compliance.and_then(|c| c.joint).map(Compliance::from),
                 position_update: s.position_update,
-                sleep: s.sleep.map(|d| Sleep {
-                    after: d.after,
-                    linear: d.linear_speed,
-                    angular: d.angular_speed,
+                sleep: s.sleep.enabled.then_some(Sleep {
+                    after: s.sleep.after,
+                    linear: s.sleep.linear_speed,
+                    angular: s.sleep.angular_speed,
                 }),
                 pgs: s.pgs.map_or_else(PgsParams::default, |d| PgsParams {
                     velocity_tolerance: d.tolerance,

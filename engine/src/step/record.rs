@@ -3,6 +3,7 @@
 //! step's warm starts (the sleeping islands' kept beside them).
 
 use super::Engine;
+use crate::collision;
 use crate::constraint::{joint, motor};
 use crate::measure::report::{ImpulseKind, ImpulseRecord, StepReport};
 use crate::model::state;
@@ -26,6 +27,10 @@ impl Engine {
             .iter()
             .filter(|r| r.kind == ImpulseKind::Normal)
             .count();
+        // The sleeping contacts hold their islands up with the impulses
+        // they had when they slept: reported, not solved.
+        let ws = &mut self.ws;
+        ws.impulses.extend_from_slice(&ws.sleeping_records);
     }
 
     /// The step's impulses as records, from the solved mLCP; also keeps
@@ -71,6 +76,7 @@ impl Engine {
             // Picked again: the state's list is merged afresh below.
             ws.merged = false;
             ws.sleeping_warm.clear();
+            ws.sleeping_records.clear();
             if state::any_asleep(&self.state) {
                 let (model, state) = (&self.model, &self.state);
                 ws.sleeping_warm
@@ -78,6 +84,33 @@ impl Engine {
                         let (a, b) = model.contact_bodies(w.id);
                         state::unlisted(state, a, b)
                     }));
+                for w in &ws.sleeping_warm {
+                    let Some(g) =
+                        collision::contact_geometry(model, state, w.id, &mut ws.geometries)
+                    else {
+                        continue;
+                    };
+                    let b = match g.b {
+                        Counterpart::Plane(p) => Party::Plane(p),
+                        Counterpart::Body(j) => Party::Body(j),
+                        Counterpart::World => Party::World,
+                    };
+                    let record = |kind, impulse| ImpulseRecord {
+                        kind,
+                        index: w.id,
+                        a: Party::Body(g.a),
+                        b,
+                        impulse,
+                    };
+                    if w.normal > 0.0 {
+                        ws.sleeping_records
+                            .push(record(ImpulseKind::Normal, g.normal * w.normal));
+                    }
+                    if w.friction != Vector3::zeros() {
+                        ws.sleeping_records
+                            .push(record(ImpulseKind::Friction, w.friction));
+                    }
+                }
             }
         }
         // Filled below in the LCP's contact order, which is ascending id:

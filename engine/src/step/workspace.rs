@@ -56,6 +56,11 @@ pub(super) struct Workspace {
     /// picked at (a restored state moves it: picked again from its list).
     pub(super) sleeping_warm: Vec<WarmContact>,
     pub(super) sleeping_picked: sleep::Written,
+    /// The sleeping contacts' impulses as the step reports them (their
+    /// kept warm starts: at rest, what holds the island up), made when
+    /// `sleeping_warm` is picked, with the contact geometry's scratch.
+    pub(super) sleeping_records: Vec<ImpulseRecord>,
+    pub(super) geometries: Vec<collision::Geometry>,
     /// Scratch of `record_impulses` while some contacts sleep: the listed
     /// contacts' warm starts, and where the last merge put them among the
     /// sleeping ones' in the state's list (valid while `merged` holds).

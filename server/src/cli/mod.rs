@@ -184,11 +184,12 @@ pub enum BenchWhat {
         /// steps at the cap and 4.7 mm of overlap.
         #[arg(long, default_value_t = 1.0)]
         relaxation: f64,
-        /// Islands at rest sleep (the scene's `[sim.sleep]` at its defaults).
-        #[arg(long)]
-        sleep: bool,
-        /// Sleeping at these thresholds instead, `LINEAR,ANGULAR` (m/s,
-        /// rad/s; implies --sleep). Rapier's rule amounts to about
+        /// Every body steps every step (`[sim.sleep] enabled = false`);
+        /// by default islands at rest sleep, as in every scene.
+        #[arg(long, conflicts_with = "sleep_speeds")]
+        no_sleep: bool,
+        /// Sleeping at these thresholds instead of the defaults,
+        /// `LINEAR,ANGULAR` (m/s, rad/s). Rapier's rule amounts to about
         /// `0.1,2` for these spheres: a body sleeps when no point of it
         /// moved faster than 0.1 m/s over a step.
         #[arg(long, value_parser = cosim_bench::pile::sleep_speeds)]
@@ -297,7 +298,8 @@ pub struct PlotArgs {
     /// Image size WIDTHxHEIGHT in pixels (default 1100 wide, 260 a panel).
     #[arg(long)]
     pub size: Option<String>,
-    /// Where a comparison's figures go (default DIR/compare).
+    /// Where the figures go: default DIR for a whole plot, DIR/focus for
+    /// --from, --to, --only or --bodies, DIR/compare for a comparison.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Animation frames per simulated second (default 25; fewer make a
@@ -337,9 +339,13 @@ pub struct RunArgs {
     /// Keep every potential contact in the LCP (no pruning), as in the notes.
     #[arg(long)]
     pub full: bool,
-    /// Output folder; default out/<scene name>.
+    /// Output folder; default out/<scene name> (or the first free
+    /// out/<scene name>-2, -3, ... when it holds an earlier run).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Write into an --out folder that holds an earlier run.
+    #[arg(long)]
+    pub overwrite: bool,
     /// Print nothing but errors.
     #[arg(long)]
     pub quiet: bool,
@@ -495,7 +501,7 @@ pub fn main() -> ExitCode {
                     stop,
                     no_momentum,
                     relaxation,
-                    sleep,
+                    no_sleep,
                     sleep_speeds,
                     pendulum,
                     out,
@@ -516,7 +522,10 @@ pub fn main() -> ExitCode {
                 },
                 seed,
                 trace,
-                sleep: sleep_speeds.or(sleep.then(Default::default)),
+                sleep: match no_sleep {
+                    true => cosim_shared::scene::SleepDesc::off(),
+                    false => sleep_speeds.unwrap_or_default(),
+                },
                 shape: layers.map_or(pile::Shape::Cube, |l| pile::Shape::Layers(l as usize)),
                 pendulum,
             };

@@ -5,7 +5,7 @@ use crate::engine::{Engine, Model, StepReport};
 use crate::output::{num, Writers};
 use cosim_figures::{self as plot, PlotOptions};
 use cosim_shared::{Scene, SceneError};
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -113,10 +113,22 @@ pub fn run(args: &RunArgs) -> ExitCode {
     };
     let mut model = Model::from_scene(&scene);
     model.params.full = args.full;
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("out").join(scene.name()));
+    let default = PathBuf::from("out").join(scene.name());
+    let out = match crate::output::run_folder(args.out.as_deref(), default.clone(), args.overwrite)
+    {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    if args.out.is_none() && out != default && !args.quiet {
+        eprintln!(
+            "{} holds an earlier run: writing {} (--overwrite to replace it)",
+            default.display(),
+            out.display()
+        );
+    }
     // The scene as run (overrides applied) goes with the outputs, so that
     // `plot` and later tools can read the run from its folder alone.
     let written = std::fs::create_dir_all(&out)
@@ -258,7 +270,15 @@ pub fn plot(args: &PlotArgs) -> ExitCode {
             }
         };
     }
-    match draw(&args.dir, &opts, false) {
+    // A window or a subset of figures or bodies goes beside the run's own
+    // figures (`DIR/focus/`), never over them; `--out` puts any plot where
+    // it says.
+    let out = match (&args.out, focused) {
+        (Some(o), _) => o.clone(),
+        (None, true) => args.dir.join("focus"),
+        (None, false) => args.dir.clone(),
+    };
+    match draw_into(&args.dir, &out, &opts, false) {
         Ok(()) => ExitCode::SUCCESS,
         Err(code) => code,
     }
@@ -288,10 +308,23 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 fn draw(dir: &std::path::Path, opts: &PlotOptions, quiet: bool) -> Result<(), ExitCode> {
-    match plot::render(dir, opts) {
+    draw_into(dir, dir, opts, quiet)
+}
+
+fn draw_into(
+    dir: &std::path::Path,
+    out: &std::path::Path,
+    opts: &PlotOptions,
+    quiet: bool,
+) -> Result<(), ExitCode> {
+    if let Err(e) = std::fs::create_dir_all(out) {
+        eprintln!("error: cannot create {}: {e}", out.display());
+        return Err(ExitCode::from(EXIT_FAILED));
+    }
+    match plot::render_into(dir, out, opts) {
         Ok(files) => {
             if !quiet {
-                println!("figures      {} files in {}", files.len(), dir.display());
+                println!("figures      {} files in {}", files.len(), out.display());
             }
             Ok(())
         }
@@ -325,6 +358,8 @@ fn simulate(
             }
             cosim_shared::SolverChoice::Pgs => cosim_shared::SolverChoice::Lemke,
         };
+        // A comparison: PGS close to its answer, as `solvers_agree` runs it.
+        m.params.pgs = crate::engine::solver::PgsParams::precise();
         Engine::new(m)
     });
     let mut shadow_max = (0.0f64, 0.0f64);
@@ -332,9 +367,16 @@ fn simulate(
     let energy_initial = crate::engine::measure::energy(engine.model(), engine.state());
     writers.state(&engine)?;
     let mut tally = Tally::default();
-    let progress = !quiet && std::io::stderr().is_terminal() && steps >= 2000;
+    let mut progress = crate::progress::Progress::new(quiet, Some(steps));
     let mut last_report = None;
+    // Ctrl-C (SIGINT) or SIGTERM ends the run after the step under way:
+    // the files are flushed and the summary written, marked interrupted.
+    let mut interrupted = false;
     for k in 0..steps {
+        if crate::serve::terminated() {
+            interrupted = true;
+            break;
+        }
         if let Some(s) = shadow_engine.as_mut() {
             s.set_state(engine.state().clone());
         }
@@ -377,21 +419,9 @@ fn simulate(
         if k % 1000 == 999 {
             writers.flush()?;
         }
-        if progress && k % (steps / 100).max(1) == 0 {
-            let frac = (k + 1) as f64 / steps as f64;
-            let bar = (frac * 40.0) as usize;
-            eprint!(
-                "\r[{}{}] {:3.0}% step {}/{steps}",
-                "#".repeat(bar),
-                " ".repeat(40 - bar),
-                frac * 100.0,
-                k + 1
-            );
-        }
+        progress.tick(k + 1, String::new);
     }
-    if progress {
-        eprintln!();
-    }
+    progress.finish();
     writers.flush()?;
     let wall = started.elapsed().as_secs_f64();
     let state = engine.state();
@@ -401,6 +431,7 @@ fn simulate(
         "scene": model.name,
         "steps": state.step,
         "steps_requested": steps,
+        "interrupted": interrupted,
         "t_end": state.t,
         "dt": model.params.h,
         "solver": model.params.solver.as_str(),
@@ -497,10 +528,16 @@ fn simulate(
             writers.dir().display()
         );
     }
+    if interrupted {
+        eprintln!(
+            "interrupted at step {} of {steps}: every file holds the steps taken, summary.json says so",
+            state.step
+        );
+    }
     if let Some(f) = &tally.first_failure {
         eprintln!(
             "error: the solver failed at {f}; the files hold every step before it (and failed_lcp.dat the LCP Lemke failed on: cosim-server lcp FILE)"
         );
     }
-    Ok(tally.failures == 0)
+    Ok(tally.failures == 0 && !interrupted)
 }

@@ -37,12 +37,21 @@ pub struct ServeArgs {
     /// Drop a live controller after this many deadline misses in a row.
     #[arg(long, default_value_t = 3)]
     pub drop_after: u32,
-    /// Stop after N steps (default: run until `cosim shutdown` or SIGINT).
-    #[arg(long, conflicts_with = "duration")]
+    /// Stop after N steps (default: the scene's `duration` or `steps`).
+    #[arg(long, conflicts_with_all = ["duration", "forever"])]
     pub steps: Option<u64>,
     /// Stop after this many simulated seconds.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "forever")]
     pub duration: Option<f64>,
+    /// No end: serve until `cosim shutdown`, Ctrl-C or SIGTERM.
+    #[arg(long)]
+    pub forever: bool,
+    /// Write states, joints, impulses and step reports for every N-th step
+    /// (and the last); the replay log keeps every step. Default: every step
+    /// for a run with an end, about every 10 ms of simulated time with
+    /// `--forever`.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub record_every: Option<u64>,
     /// Pace the simulation at FACTOR times real time (default: as fast as
     /// possible).
     #[arg(long, allow_negative_numbers = true)]
@@ -60,6 +69,9 @@ pub struct ServeArgs {
     /// Write no files (a server that runs for days; benchmarks).
     #[arg(long, conflicts_with = "out")]
     pub no_record: bool,
+    /// Write into an --out folder that holds an earlier run.
+    #[arg(long)]
+    pub overwrite: bool,
     /// Print nothing but errors.
     #[arg(long)]
     pub quiet: bool,
@@ -78,9 +90,13 @@ pub struct DemoArgs {
     /// Target elevation of the upper arm (degrees above horizontal).
     #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
     pub elevation: f64,
-    /// Output folder.
-    #[arg(long, default_value = "out/demo")]
-    pub out: PathBuf,
+    /// Output folder (default out/demo, or the first free out/demo-2, -3,
+    /// ... when it holds an earlier run).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Write into an --out folder that holds an earlier run.
+    #[arg(long)]
+    pub overwrite: bool,
     /// How server and controller wait.
     #[arg(long, value_enum, default_value_t = WaitMode::Hybrid)]
     pub wait: WaitMode,
@@ -179,11 +195,26 @@ fn options(args: &ServeArgs) -> Result<(cosim_shared::Scene, ServeOptions), Stri
         mcap: false,
         fps: None,
         gif_size: None,
+        overwrite: false,
     };
-    let scene = super::run::load(&run).map_err(|e| e.to_string())?;
-    let steps = args.steps.or_else(|| {
-        args.duration
-            .map(|d| (d / scene.sim.dt).round().max(1.0) as u64)
+    let mut scene = super::run::load(&run).map_err(|e| e.to_string())?;
+    let steps = match args.forever {
+        true => None,
+        false => Some(args.steps.unwrap_or_else(|| {
+            args.duration.map_or_else(
+                || scene.step_count(),
+                |d| (d / scene.sim.dt).round().max(1.0) as u64,
+            )
+        })),
+    };
+    // scene.toml is the scene as served: its length the one run.
+    if let Some(n) = steps {
+        scene.sim.steps = Some(n);
+        scene.sim.duration = None;
+    }
+    let record_every = args.record_every.unwrap_or(match steps {
+        Some(_) => 1,
+        None => ((0.01 / scene.sim.dt).round() as u64).max(1),
     });
     let opts = ServeOptions {
         name: args.name.clone(),
@@ -195,14 +226,25 @@ fn options(args: &ServeArgs) -> Result<(cosim_shared::Scene, ServeOptions), Stri
         drop_after: args.drop_after,
         steps,
         realtime: args.realtime,
-        out: (!args.no_record).then(|| {
-            args.out
-                .clone()
-                .unwrap_or_else(|| PathBuf::from("out").join(format!("serve-{}", args.name)))
-        }),
+        out: match args.no_record {
+            true => None,
+            // A folder given is checked by `serve` once the name is known
+            // to be free (a second server of a running name is refused as
+            // such, its folder untouched).
+            false => Some(match &args.out {
+                Some(o) => o.clone(),
+                None => crate::output::run_folder(
+                    None,
+                    PathBuf::from("out").join(format!("serve-{}", args.name)),
+                    args.overwrite,
+                )?,
+            }),
+        },
+        overwrite: args.overwrite,
         quiet: args.quiet,
         timeline: false,
         publish_every: args.publish_every,
+        record_every,
     };
     Ok((scene, opts))
 }
@@ -255,7 +297,7 @@ fn report(
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(match e {
-                ServeError::TooLarge { .. } => EXIT_BAD_INPUT,
+                ServeError::TooLarge { .. } | ServeError::Occupied(_) => EXIT_BAD_INPUT,
                 _ => EXIT_FAILED,
             })
         }
@@ -279,6 +321,22 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
     }
     // A name of its own: two demos at once do not meet.
     let name = format!("demo-{}", std::process::id());
+    let default = PathBuf::from("out/demo");
+    let out = match crate::output::run_folder(args.out.as_deref(), default.clone(), args.overwrite)
+    {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_BAD_INPUT);
+        }
+    };
+    if args.out.is_none() && out != default {
+        eprintln!(
+            "{} holds an earlier run: writing {} (--overwrite to replace it)",
+            default.display(),
+            out.display()
+        );
+    }
     let serve_args = ServeArgs {
         scene: None,
         name: name.clone(),
@@ -290,11 +348,15 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
         drop_after: 3,
         steps: None,
         duration: Some(args.duration),
+        forever: false,
+        record_every: None,
         realtime: None,
         dt: None,
         solver: None,
-        out: Some(args.out.clone()),
+        out: Some(out.clone()),
         no_record: false,
+        // Chosen above.
+        overwrite: true,
         quiet: false,
         publish_every: None,
     };
@@ -338,7 +400,6 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
         args.elevation,
         args.duration
     );
-    let out = args.out.clone();
     let code = report(run_serve(&scene, opts), Some(&out), false);
     // The controller ends on the server's last frame.
     let _ = child.0.wait();

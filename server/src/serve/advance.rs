@@ -96,15 +96,16 @@ impl Server {
                     );
                 }
             }
-            if let Some(f) = self.files.as_mut() {
-                f.writers.state(&self.engine)?;
-            }
-            if let Some(f) = self.files.as_mut() {
-                f.writers.impulses(&self.engine)?;
-            }
         }
-        if let Some(f) = self.files.as_mut() {
-            f.writers.step(&report, None)?;
+        // `--record-every N`: every N-th step, the last, and every step
+        // that failed or fell back (nothing unusual is decimated away).
+        let step = self.engine.state().step;
+        let record = step.is_multiple_of(self.opts.record_every)
+            || self.opts.steps == Some(self.c.steps)
+            || report.error.is_some()
+            || report.fallback.is_some();
+        if record {
+            self.write_step(&report)?;
         }
         self.last_report = Some(report);
         if self.c.steps.is_multiple_of(1000) {
@@ -116,6 +117,22 @@ impl Server {
             }
         }
         Ok(compute)
+    }
+
+    /// The state after the last step and its report, in the per-step
+    /// files (once per step).
+    pub(super) fn write_step(&mut self, report: &StepReport) -> Result<(), ServeError> {
+        let step = self.engine.state().step;
+        let Some(f) = self.files.as_mut() else {
+            return Ok(());
+        };
+        if report.ok() && self.last_written != Some(step) {
+            f.writers.state(&self.engine)?;
+            f.writers.impulses(&self.engine)?;
+            self.last_written = Some(step);
+        }
+        f.writers.step(report, None)?;
+        Ok(())
     }
 
     pub(super) fn write_summary(&self, ending: Ending, wall: f64) -> std::io::Result<()> {

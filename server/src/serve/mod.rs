@@ -68,6 +68,12 @@ pub struct ServeOptions {
     /// Also publish every N-th step's frame (and the last) on the
     /// decimated stream `cosim/NAME/state-every` (`--publish-every N`).
     pub publish_every: Option<u64>,
+    /// Write the per-step files (states, joints, impulses, step reports)
+    /// for every N-th step, the last, and every failed or fallen-back
+    /// step; `replay.csv` and `inputs.csv` keep every step.
+    pub record_every: u64,
+    /// Write into an `out` that holds an earlier run (else refused).
+    pub overwrite: bool,
 }
 
 /// How often a late controller is checked for having exited (its
@@ -114,12 +120,20 @@ pub enum ServeError {
         max: usize,
     },
     Io(std::io::Error),
+    /// The output folder holds an earlier run (and `--overwrite` was not
+    /// given).
+    Occupied(PathBuf),
 }
 
 impl std::fmt::Display for ServeError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             ServeError::Services(e) => write!(f, "{e}"),
+            ServeError::Occupied(p) => write!(
+                f,
+                "{} holds an earlier run; choose another --out, or add --overwrite",
+                p.display()
+            ),
             ServeError::TooLarge { bytes, max } => write!(
                 f,
                 "the scene's state frame takes {bytes} bytes; a served scene's may take at most {max} (its bodies, joints and contacts, see docs/protocol.md)"
@@ -260,6 +274,8 @@ struct Server {
     final_published: bool,
     /// When the last frame of the current state went out.
     frame_out: Instant,
+    /// The step whose state the files hold last (`--record-every`).
+    last_written: Option<u64>,
 }
 
 /// Runs a server on `scene` until `--steps`, a shutdown request or a
@@ -282,6 +298,9 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
     // rewrote scene.toml and the first run's replay failed at step 1).
     let svc = Services::create(&opts.name, opts.publish_every.is_some(), frame_words)?;
     if let Some(out) = &opts.out {
+        if !opts.overwrite && crate::output::holds_run(out) {
+            return Err(ServeError::Occupied(out.clone()));
+        }
         std::fs::create_dir_all(out)?;
         std::fs::write(out.join("scene.toml"), &toml)?;
     }
@@ -331,6 +350,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         failed_stop: false,
         final_published: false,
         frame_out: Instant::now(),
+        last_written: None,
         engine,
         svc,
         opts,
@@ -348,6 +368,13 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
     // before a shutdown request or a signal) are logged and counted, not
     // dropped silently.
     s.drain_inputs();
+    // The final state, where `--record-every` skipped it (a run stopped by
+    // a signal or a shutdown request).
+    if let Some(r) = s.last_report {
+        if s.last_written != Some(s.engine.state().step) && r.ok() {
+            s.write_step(&r)?;
+        }
+    }
     if let Some(f) = s.files.as_mut() {
         f.writers.flush()?;
         f.logs.flush()?;
@@ -357,7 +384,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
     Ok((s.c.clone(), ending, wall))
 }
 
-fn terminated() -> bool {
+pub(crate) fn terminated() -> bool {
     iceoryx2_bb_posix::signal::SignalHandler::termination_requested()
 }
 
@@ -365,25 +392,50 @@ impl Server {
     fn run(&mut self) -> Result<Ending, ServeError> {
         if let Some(f) = self.files.as_mut() {
             f.writers.state(&self.engine)?;
+            self.last_written = Some(self.engine.state().step);
         }
         if self.opts.controllers > 0 {
             self.status |= STATUS_WAITING;
         }
         self.publish()?;
         if !self.opts.quiet {
+            let h = self.engine.model().params.h;
             eprintln!(
-                "serving '{}' on cosim/{}/ ({} bodies, {} joints, h = {} s){}",
+                "serving '{}' on cosim/{}/ ({} bodies, {} joints, h = {} s)",
                 self.engine.model().name,
                 self.opts.name,
                 self.engine.model().bodies.len(),
                 self.engine.model().joints.len(),
-                self.engine.model().params.h,
-                if self.opts.controllers > 0 {
-                    format!("; waiting for {} controllers", self.opts.controllers)
-                } else {
-                    String::new()
+                h,
+            );
+            eprintln!(
+                "{}",
+                match self.opts.steps {
+                    Some(n) => format!(
+                        "ends after {n} steps ({} s simulated; --steps, --duration or --forever to change)",
+                        cosim_shared::num(n as f64 * h)
+                    ),
+                    None => "no end (--forever): serves until `cosim shutdown`, Ctrl-C or SIGTERM".into(),
                 }
             );
+            match &self.opts.out {
+                Some(out) => eprintln!(
+                    "recording to {}: {}, and every step's inputs and state hash for replay",
+                    out.display(),
+                    match self.opts.record_every {
+                        1 => "states, joints, impulses and step reports of every step".to_string(),
+                        n => format!("states, joints, impulses and step reports of every {n}th step (--record-every 1 for all)"),
+                    }
+                ),
+                None => eprintln!("recording nothing (--no-record)"),
+            }
+            if self.opts.controllers > 0 {
+                eprintln!(
+                    "waiting for {} controller{} to join",
+                    self.opts.controllers,
+                    if self.opts.controllers == 1 { "" } else { "s" }
+                );
+            }
         }
         // Before the first step: wait for the controllers asked for.
         while self.slots.len() < self.opts.controllers {
@@ -417,6 +469,7 @@ impl Server {
             self.c.timeline = Vec::with_capacity(self.opts.steps.unwrap_or(0) as usize);
         }
         let mut last_top: Option<Instant> = None;
+        let mut progress = crate::progress::Progress::new(self.opts.quiet, self.opts.steps);
         loop {
             if terminated() {
                 return Ok(Ending::Signal);
@@ -460,6 +513,10 @@ impl Server {
                 continue;
             }
             let compute = self.take_step(k)?;
+            let (joined, misses) = (self.slots.len(), self.c.deadline_misses);
+            progress.tick(self.c.steps, || {
+                format!(", {joined} controllers, {misses} deadline misses")
+            });
             if self.failed_stop {
                 self.publish()?;
                 return Ok(Ending::Failed);

@@ -35,6 +35,12 @@ pub fn rebuild(dir: &Path) -> Result<serde_json::Value, String> {
     let scene = cosim_shared::Scene::load(&dir.join("scene.toml")).map_err(|e| e.to_string())?;
 
     let (steps_csv, steps_cut) = read(dir, "steps.csv")?;
+    // A server killed before its first step may leave steps.csv without
+    // even its header: no rows.
+    let steps_csv = match steps_csv.trim().is_empty() {
+        true => crate::output::STEPS_HEADER.to_string(),
+        false => steps_csv,
+    };
     let mut lines = steps_csv.lines();
     let header = lines.next().unwrap_or_default();
     let (c_t, c_status, c_pen, c_joint, c_fallback) = (
@@ -82,6 +88,19 @@ pub fn rebuild(dir: &Path) -> Result<serde_json::Value, String> {
         .iter()
         .filter(|o| matches!(o, Op::Step { .. }))
         .count();
+    // With `--record-every N` steps.csv holds every N-th step (and every
+    // failed one); replay.csv every step attempted. The state after the
+    // last step attempted that did not fail is where the files end.
+    if replay_steps as u64 > steps + failures {
+        steps = replay_steps as u64 - failures;
+        let last = replay.ops.iter().rev().find_map(|o| match o {
+            Op::Step { step, .. } => Some(*step),
+            _ => None,
+        });
+        if let Some(k) = last {
+            t_end = t_end.max((k + 1) as f64 * scene.sim.dt);
+        }
+    }
 
     // One input frame is a row per torque and impulse (one row if it has
     // neither), all with the same step, controller, sequence and status.

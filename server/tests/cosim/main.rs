@@ -55,11 +55,23 @@ impl ServerProc {
 
     /// Starts the server without waiting for its services (a run that may
     /// end before a client could see it).
+    /// Without `--steps` or `--duration` in `extra`, it serves until shut
+    /// down (`--forever`), as the tests' clients expect, recording every
+    /// step unless `extra` says otherwise.
     fn spawn(name: &str, out: &Path, extra: &[&str]) -> ServerProc {
+        let bounded = extra.iter().any(|a| *a == "--steps" || *a == "--duration");
+        let every = extra.contains(&"--record-every");
         let child = Command::new(EXE)
             .args(["serve", "--quiet", "--name", name, "--out"])
             .arg(out)
             .args(extra)
+            .args((!bounded).then_some("--forever"))
+            .args(
+                (!every)
+                    .then_some(["--record-every", "1"])
+                    .into_iter()
+                    .flatten(),
+            )
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
             .spawn()

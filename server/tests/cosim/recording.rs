@@ -11,7 +11,7 @@ fn a_recording_matches_the_servers_own_files_and_plots() {
     let rec_path = rec.path().to_path_buf();
     let rname = name.clone();
     let recorder = std::thread::spawn(move || {
-        cosim_client::cli::record(&rname, &rec_path, None, true).map_err(|e| e.to_string())
+        cosim_client::cli::record(&rname, &rec_path, None, true, false).map_err(|e| e.to_string())
     });
     // The recorder writes scene.toml once subscribed: from then on it
     // receives every frame, so the controller may join.
@@ -31,7 +31,7 @@ fn a_recording_matches_the_servers_own_files_and_plots() {
         c.send(input).unwrap();
     }
     assert!(server.finish().0.success());
-    let frames = recorder.join().unwrap().expect("record");
+    let frames = recorder.join().unwrap().expect("record").frames;
     assert!(frames >= 401, "{frames}");
     let ours = positions(dir.path(), "lower");
     let theirs = positions(rec.path(), "lower");
@@ -148,4 +148,34 @@ fn a_decimated_stream_carries_every_nth_step_and_the_last() {
     let mut want: Vec<(u64, bool)> = (0..=90).step_by(10).map(|k| (k, false)).collect();
     want.push((95, true));
     assert_eq!(seen, want);
+}
+
+/// Issue 46, point 4: `cosim record --lockstep` keeps every frame. It joins
+/// as a controller that sends no input, so the server (waiting for one
+/// controller, then stepping as fast as it can: far faster than a monitor
+/// reads) waits for it each step; the recording holds every state the
+/// server wrote, to the bit, and says so.
+#[test]
+fn a_lockstep_recording_keeps_every_frame() {
+    let dir = TempDir::new("record-lockstep");
+    let rec = TempDir::new("record-lockstep-out");
+    let name = unique("record-lockstep");
+    let server = ServerProc::start(
+        &name,
+        dir.path(),
+        &["--controllers", "1", "--steps", "3000"],
+    );
+    let r = cosim_client::cli::record(&name, rec.path(), None, false, true).expect("record");
+    assert!(server.finish().0.success());
+    assert_eq!(
+        (r.frames, r.first, r.last, r.dropped),
+        (3001, Some(0), Some(3000), 0),
+        "{r:?}"
+    );
+    let ours = positions(dir.path(), "lower");
+    assert_eq!(ours.len(), 3001);
+    assert_eq!(ours, positions(rec.path(), "lower"));
+    // The recorder was the server's one controller: no input, no miss.
+    let s = summary(dir.path());
+    assert_eq!(s["deadline_misses"], 0, "{s}");
 }

@@ -39,7 +39,7 @@ fn a_killed_server_leaves_nothing_that_blocks_its_name() {
     child.kill().unwrap(); // SIGKILL: no cleanup
     child.wait().unwrap();
     // The next server of that name removes the dead one's resources.
-    let second = ServerProc::start(&name, dir.path(), &[]);
+    let second = ServerProc::start(&name, dir.path(), &["--overwrite"]);
     Connection::connect(&name).unwrap().shutdown().unwrap();
     let (status, stderr) = second.finish();
     assert!(status.success(), "{stderr}");
@@ -58,7 +58,7 @@ fn a_killed_servers_name_is_free_while_its_old_clients_live() {
     let mut child = first.child.take().unwrap();
     child.kill().unwrap(); // SIGKILL: the clients above stay attached
     child.wait().unwrap();
-    let second = ServerProc::start(&name, dir.path(), &[]);
+    let second = ServerProc::start(&name, dir.path(), &["--overwrite"]);
     let new_pid = u64::from(second.child.as_ref().unwrap().id());
     // The old clients talk to the new server on the same services.
     assert_eq!(conn.info().expect("info from the new server").pid, new_pid);
@@ -214,4 +214,24 @@ fn a_killed_servers_logs_replay_to_the_cut_and_summarize_rebuilds_a_summary() {
         .unwrap();
     assert!(!again.status.success());
     assert!(String::from_utf8_lossy(&again.stderr).contains("exists"));
+}
+
+/// Issue 46: a server killed before its first step (still waiting for its
+/// controller) leaves files `summarize` reads: zero steps, not "no column
+/// 't'".
+#[test]
+fn a_server_killed_before_its_first_step_is_summarized() {
+    let (mut server, dir, _name) = serve_test("killed-early", &["--controllers", "1"]);
+    let mut child = server.child.take().unwrap();
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let out = Command::new(EXE)
+        .arg("summarize")
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let s = summary(dir.path());
+    assert_eq!(s["steps"], 0, "{s}");
+    assert_eq!(s["replayable_steps"], 0, "{s}");
 }

@@ -59,7 +59,8 @@ impl Scene {
         nonneg(sim.restitution_threshold)
             .map_err(|m| err("sim.restitution_threshold".into(), m))?;
         nonneg(sim.contact_margin).map_err(|m| err("sim.contact_margin".into(), m))?;
-        if let Some(sleep) = &sim.sleep {
+        {
+            let sleep = &sim.sleep;
             nonneg(sleep.after).map_err(|m| err("sim.sleep.after".into(), m))?;
             positive(sleep.linear_speed).map_err(|m| err("sim.sleep.linear_speed".into(), m))?;
             positive(sleep.angular_speed).map_err(|m| err("sim.sleep.angular_speed".into(), m))?;

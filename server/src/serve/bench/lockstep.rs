@@ -62,6 +62,8 @@ pub(super) fn lockstep_of(
         quiet: true,
         timeline: sidecar.is_some_and(|r| r.ends_with("-toggle")),
         publish_every: None,
+        record_every: 1,
+        overwrite: true,
     };
     let server = std::thread::spawn(move || serve(&scene, opts).map_err(|e| e.to_string()));
     // Peers retry until the server's services exist.
