@@ -32,6 +32,18 @@ pub struct Gains {
     /// Elbow stiffness and damping (the lower sphere: about 0.022 kg m^2).
     pub kp_elbow: f64,
     pub kd_elbow: f64,
+    /// A strike: from step `from` to step `to` the target elevation is
+    /// `elevation_deg` instead (the demo swings the arm down until the
+    /// lower sphere hits the floor and presses on it, then lifts it).
+    pub strike: Option<Strike>,
+}
+
+/// A stretch of steps with another target elevation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Strike {
+    pub from: u64,
+    pub to: u64,
+    pub elevation_deg: f64,
 }
 
 impl Default for Gains {
@@ -43,6 +55,7 @@ impl Default for Gains {
             kd: 3.0,
             kp_elbow: 2.0,
             kd_elbow: 0.3,
+            strike: None,
         }
     }
 }
@@ -50,8 +63,21 @@ impl Default for Gains {
 impl Gains {
     /// Unit vector of the target arm direction.
     pub fn target(&self) -> Vector3<f64> {
+        self.target_at(0)
+    }
+
+    /// The target elevation at step `step` (degrees).
+    pub fn elevation_at(&self, step: u64) -> f64 {
+        match self.strike {
+            Some(s) if (s.from..s.to).contains(&step) => s.elevation_deg,
+            _ => self.elevation_deg,
+        }
+    }
+
+    /// Unit vector of the target arm direction at step `step`.
+    pub fn target_at(&self, step: u64) -> Vector3<f64> {
         let (e, a) = (
-            self.elevation_deg.to_radians(),
+            self.elevation_at(step).to_radians(),
             self.azimuth_deg.to_radians(),
         );
         Vector3::new(e.cos() * a.cos(), e.cos() * a.sin(), e.sin())
@@ -88,7 +114,7 @@ pub fn torques(frame: &StateFrame, g: &Gains) -> (Vector3<f64>, Vector3<f64>) {
     // Shoulder: the whole chain's gravity moment about the shoulder, which
     // is what the shoulder carries at rest, plus the elbow's reaction.
     let d = (x_u - shoulder).normalize();
-    let tau_s = g.kp * d.cross(&g.target())
+    let tau_s = g.kp * d.cross(&g.target_at(frame.step))
         - g.kd * w_u
         - (x_u - shoulder).cross(&(MASS_UPPER * gravity))
         - (x_l - shoulder).cross(&(MASS_LOWER * gravity))

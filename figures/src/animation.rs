@@ -12,6 +12,7 @@ use super::camera::screen_radius;
 pub use super::camera::{marker, Camera};
 use super::data::RunData;
 use super::gif::GifWriter;
+use super::text::Kerned;
 use super::{color, PlotError, FONT};
 use cosim_engine::model::{Attachment, Model, Shape};
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
@@ -467,12 +468,14 @@ fn draw_frame<DB: DrawingBackend>(
     if model.bodies.len() <= 12 {
         for b in 0..model.bodies.len() {
             let (x, y) = pix(&centre(b));
-            let rp = (model.bodies[b].shape.bounding_radius() * cam.scale)
-                .round()
-                .max(2.0) as i32;
+            // Beside the disc's edge at 45 degrees up and right (the text's
+            // top-left corner is its position; 13 px tall): the corner of
+            // the bounding square left a gap of 0.4 radii on a large body.
+            let rp = (model.bodies[b].shape.bounding_radius() * cam.scale).max(2.0);
+            let edge = (0.71 * rp).round() as i32;
             area.draw(&Text::new(
                 model.bodies[b].name.clone(),
-                (x + rp + 3, y - rp),
+                (x + edge + 2, y - edge - 11),
                 (FONT, 13).into_font().color(&RGBColor(40, 40, 40)),
             ))
             .map_err(e)?;
@@ -609,7 +612,7 @@ pub fn gif_at(
     let fail = |m: String| PlotError::Draw(format!("{}: {m}", path.display()));
     let mut rgb = vec![0u8; 3 * size.0 as usize * size.1 as usize];
     let render = |i: usize, rgb: &mut Vec<u8>| -> Result<(), PlotError> {
-        let area = BitMapBackend::with_buffer(rgb, size).into_drawing_area();
+        let area = Kerned::new(BitMapBackend::with_buffer(rgb, size)).into_drawing_area();
         draw_frame(&area, model, run, &cam, i).map_err(fail)?;
         area.present().map_err(|e| fail(e.to_string()))
     };
@@ -661,7 +664,7 @@ pub fn stills(
         let i = frames[(k * (frames.len() - 1)) / count.saturating_sub(1).max(1)];
         let path = dir.join(format!("{stem}_{k}.png"));
         {
-            let area = BitMapBackend::new(&path, size).into_drawing_area();
+            let area = Kerned::new(BitMapBackend::new(&path, size)).into_drawing_area();
             let fail = |m: String| PlotError::Draw(format!("{}: {m}", path.display()));
             draw_frame(&area, model, run, &cam, i).map_err(fail)?;
             area.present().map_err(|e| fail(e.to_string()))?;

@@ -53,7 +53,8 @@ pub struct Panel {
     /// Whole numbers only (counts): fractional ticks are not labelled.
     pub counts: bool,
     pub scale: Scale,
-    /// A force panel: its scale is chosen from its series when drawn
+    /// A force panel (or another whose spikes would flatten the rest, the
+    /// timings): its scale is chosen from its series when drawn
     /// (`settle`), also after two runs' series were put together.
     pub forces: bool,
     /// A force panel's unit: N, or N m for torques.
@@ -367,7 +368,7 @@ pub(crate) fn figure_sized(
         move |m: String| PlotError::Draw(format!("{p}: {m}"))
     };
     draw(
-        BitMapBackend::new(&png, (width, height)).into_drawing_area(),
+        super::text::Kerned::new(BitMapBackend::new(&png, (width, height))).into_drawing_area(),
         title,
         frame,
         panels,

@@ -320,23 +320,30 @@ pub fn specs(run: &RunData) -> Vec<Spec> {
     put(
         "timings",
         "Wall time per step by stage (this machine, this run)",
-        vec![Panel::new(
-            "time (us)",
-            stages
-                .iter()
-                .enumerate()
-                .map(|(i, &(column, name))| Series {
-                    name: name.into(),
-                    color: color(i),
-                    points: run
-                        .step_series(column)
-                        .into_iter()
-                        .map(|(t, s)| (t, s * 1e6))
-                        .collect(),
-                    thin: false,
-                })
-                .collect(),
-        )],
+        // The first step's spike (the first factorisations, cold caches)
+        // and the machine's hiccups would flatten the rest: the force
+        // panels' symlog rule.
+        vec![Panel {
+            forces: true,
+            unit: "us",
+            ..Panel::new(
+                "time",
+                stages
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &(column, name))| Series {
+                        name: name.into(),
+                        color: color(i),
+                        points: run
+                            .step_series(column)
+                            .into_iter()
+                            .map(|(t, s)| (t, s * 1e6))
+                            .collect(),
+                        thin: false,
+                    })
+                    .collect(),
+            )
+        }],
     );
     let log_residual: Vec<(f64, f64)> = run
         .step_series("residual")

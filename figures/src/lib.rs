@@ -11,6 +11,7 @@ pub mod figures;
 pub mod gif;
 pub mod mcap;
 mod panels;
+pub mod text;
 
 use cosim_engine::model::Counterpart;
 use cosim_engine::{Model, State};

@@ -245,7 +245,7 @@ pub(crate) fn force_panel(what: &str, series: Vec<Series>) -> Panel {
 
 impl Panel {
     /// A force panel's axis from its series: symlog when the largest force
-    /// passes 100 times the typical one (the median of the nonzero
+    /// passes 20 times the typical one (the median of the nonzero
     /// values), so that one impact does not flatten resting contact; its
     /// linear range is that typical force, rounded down to a power of ten.
     pub(crate) fn settle(mut self) -> Panel {
@@ -262,7 +262,7 @@ impl Panel {
         values.sort_by(f64::total_cmp);
         let what = std::mem::take(&mut self.ylabel);
         match (values.get(values.len() / 2), values.last()) {
-            (Some(&typical), Some(&largest)) if largest > 100.0 * typical => {
+            (Some(&typical), Some(&largest)) if largest > 20.0 * typical => {
                 let c = 10f64.powf(typical.log10().floor());
                 self.ylabel = format!("{what} ({}, symlog, linear below {})", self.unit, tick(c));
                 self.scale = Scale::Symlog { c };

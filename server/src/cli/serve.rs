@@ -100,6 +100,15 @@ pub struct DemoArgs {
     /// How server and controller wait.
     #[arg(long, value_enum, default_value_t = WaitMode::Hybrid)]
     pub wait: WaitMode,
+    /// The strike's target elevation (degrees): from a fifth of the run to
+    /// 45 % of it the controller swings the arm down to it, the lower
+    /// sphere strikes the floor and presses on it, sliding; then it lifts
+    /// the arm back.
+    #[arg(long, default_value_t = -40.0, allow_negative_numbers = true)]
+    pub strike: f64,
+    /// Hold the arm all along, no strike.
+    #[arg(long)]
+    pub no_strike: bool,
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -139,6 +148,21 @@ pub struct PdArgs {
     pub wait: WaitMode,
     #[arg(long)]
     pub steps: Option<u64>,
+    /// A strike: `FROM,TO,DEG`, steps FROM to TO at elevation DEG.
+    #[arg(long, value_parser = strike)]
+    pub strike: Option<cosim_client::pd::Strike>,
+}
+
+fn strike(s: &str) -> Result<cosim_client::pd::Strike, String> {
+    let bad = || format!("{s:?}: write FROM,TO,DEG (steps, steps, degrees)");
+    let [a, b, c] = s.split(',').collect::<Vec<_>>()[..] else {
+        return Err(bad());
+    };
+    Ok(cosim_client::pd::Strike {
+        from: a.trim().parse().map_err(|_| bad())?,
+        to: b.trim().parse().map_err(|_| bad())?,
+        elevation_deg: c.trim().parse().map_err(|_| bad())?,
+    })
 }
 
 fn positive(name: &str, v: f64) -> Result<(), String> {
@@ -374,6 +398,9 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
             return ExitCode::from(EXIT_FAILED);
         }
     };
+    // The strike, in steps of the scene's h.
+    let steps = (args.duration / scene.sim.dt).round() as u64;
+    let strike = format!("{},{},{}", steps / 5, steps * 9 / 20, args.strike);
     // The controller starts first and retries its join until the server is
     // up (see `pd_controller`).
     let child = std::process::Command::new(exe)
@@ -386,6 +413,12 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
             "--wait",
             args.wait.as_str(),
         ])
+        .args(
+            (!args.no_strike)
+                .then_some(["--strike", strike.as_str()])
+                .into_iter()
+                .flatten(),
+        )
         .spawn();
     let mut child = match child {
         Ok(c) => Child(c),
@@ -395,9 +428,18 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
         }
     };
     println!(
-        "demo: reference scene, PD controller (pid {}) holding the upper arm at {} deg, {} s in lockstep",
+        "demo: reference scene, PD controller (pid {}) holding the upper arm at {} deg{}, {} s in lockstep",
         child.0.id(),
         args.elevation,
+        match args.no_strike {
+            true => String::new(),
+            false => format!(
+                ", striking the floor at {} deg from {} s to {} s",
+                args.strike,
+                cosim_shared::num(args.duration / 5.0),
+                cosim_shared::num(args.duration * 0.45)
+            ),
+        },
         args.duration
     );
     let code = report(run_serve(&scene, opts), Some(&out), false);
@@ -427,6 +469,7 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
 pub fn pd_controller(args: &PdArgs) -> ExitCode {
     let gains = cosim_client::pd::Gains {
         elevation_deg: args.elevation,
+        strike: args.strike,
         ..Default::default()
     };
     // The server may still be creating its services.

@@ -6,7 +6,7 @@ use super::*;
 fn the_demo_holds_the_pendulum_at_its_target() {
     let dir = TempDir::new("demo");
     let out = Command::new(EXE)
-        .args(["demo", "--duration", "3", "--elevation", "15", "--out"])
+        .args(["demo", "--duration", "4", "--elevation", "15", "--out"])
         .arg(dir.path())
         .output()
         .unwrap();
@@ -19,15 +19,46 @@ fn the_demo_holds_the_pendulum_at_its_target() {
     // The upper sphere is 0.3 m from the shoulder at (0, 0, 0.45): its
     // elevation over the last second stays within 0.5 degrees of 15.
     let rows = positions(dir.path(), "upper");
-    assert_eq!(rows.len(), 3001);
-    for (step, x) in &rows[2000..] {
+    assert_eq!(rows.len(), 4001);
+    for (step, x) in &rows[3000..] {
         let e = elevation_deg(*x);
         assert!((e - 15.0).abs() < 0.5, "step {step}: elevation {e}");
     }
     let s = summary(dir.path());
     assert_eq!(s["deadline_misses"], 0);
-    assert_eq!(s["steps"], 3000);
+    assert_eq!(s["steps"], 4000);
     let _ = STATUS_SHUTDOWN;
+    // The strike (issue 46, point 5): from 0.8 s to 1.8 s the arm swings
+    // down; the lower sphere hits the floor (an impact far above the
+    // resting push that follows), then presses on it and slides
+    // (friction), and leaves it when the arm lifts.
+    let csv = std::fs::read_to_string(dir.path().join("impulses.csv")).unwrap();
+    let rows = |kind: &str| -> Vec<(u64, f64)> {
+        csv.lines()
+            .filter(|l| l.contains(&format!(",{kind},lower/floor,")))
+            .map(|l| {
+                let c: Vec<&str> = l.split(',').collect();
+                let p: Vec<f64> = c[6..9].iter().map(|v| v.parse().unwrap()).collect();
+                (
+                    c[0].parse().unwrap(),
+                    (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt(),
+                )
+            })
+            .collect()
+    };
+    let (normal, friction) = (rows("normal"), rows("friction"));
+    assert!(normal.len() > 300, "{} normal rows", normal.len());
+    assert!(friction.len() > 100, "{} friction rows", friction.len());
+    assert!(
+        normal.iter().all(|&(k, _)| (800..1900).contains(&k)),
+        "contact outside the strike"
+    );
+    let impact = normal.iter().map(|r| r.1).fold(0.0, f64::max);
+    let resting = normal[normal.len() / 2].1;
+    assert!(
+        impact > 20.0 * resting,
+        "impact {impact} N s, resting {resting} N s"
+    );
 }
 
 /// examples/python/slider_controller.py: a Python controller that reads
