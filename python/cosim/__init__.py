@@ -1,4 +1,4 @@
-"""Python controllers and monitors for cosim-server (wire protocol 2).
+"""Python controllers and monitors for cosim-server (wire protocol 4).
 
     import cosim
     with cosim.Controller("lab") as c:
@@ -14,12 +14,15 @@ from .client import (
     Controller,
     CosimError,
     Monitor,
+    Names,
     NoServer,
     Refused,
     Shutdown,
     Timeout,
 )
 from .wire import CONTACT_DTYPE, PROTOCOL_VERSION, State
+
+__version__ = "0.3.0"
 
 __all__ = [
     "BadFrame",
@@ -28,10 +31,12 @@ __all__ = [
     "Controller",
     "CosimError",
     "Monitor",
+    "Names",
     "NoServer",
     "PROTOCOL_VERSION",
     "Refused",
     "Shutdown",
     "State",
     "Timeout",
+    "__version__",
 ]

@@ -6,7 +6,12 @@ import ctypes
 import os
 import time
 import weakref
-from typing import Iterator, Mapping, Optional, Sequence, Tuple
+from typing import Any, Dict, Iterator, List, Mapping, Optional, Sequence, Tuple, Union
+
+try:  # Python 3.11 and later
+    import tomllib as _toml
+except ImportError:  # pragma: no cover - older Pythons (the tomli dependency)
+    import tomli as _toml
 
 import iceoryx2 as iox2
 import numpy as np
@@ -38,6 +43,9 @@ from .wire import (
     MOTOR_WORDS,
     State,
     StateHeader,
+    CMD_SCENE,
+    MESSAGE_LEN,
+    SCENE_CHUNKS_PER_REQUEST,
 )
 
 
@@ -161,6 +169,80 @@ class Connection:
     def shutdown(self) -> ControlResponse:
         return self.request(CMD_SHUTDOWN)
 
+    def scene_toml(self, timeout: float = 5.0) -> str:
+        """The scene the server runs, as TOML text (its scene.toml): asked
+        for in chunks of MESSAGE_LEN bytes, from the byte reached on."""
+        data = bytearray()
+        node_id = self.node.id.value
+        while True:
+            req = ControlRequest(
+                version=PROTOCOL_VERSION,
+                command=CMD_SCENE,
+                count=len(data),
+                node_id_lo=node_id & (2**64 - 1),
+                node_id_hi=node_id >> 64,
+                pid=os.getpid(),
+            )
+            pending = self._client.send_copy(req)
+            self._wake.notify()
+            deadline = time.monotonic() + timeout
+            chunks, total = 0, None
+            while True:
+                response = pending.receive()
+                if response is None:
+                    if time.monotonic() > deadline:
+                        raise Timeout(f"no scene from the server '{self.name}' within {timeout} s")
+                    self.node.wait(iox2.Duration.from_micros(100))
+                    continue
+                r = response.payload().contents
+                if r.status != 0:
+                    raise Refused(r.status, r.text())
+                total = r.value
+                take = max(0, min(MESSAGE_LEN, total - len(data)))
+                data += bytes(r.message[:take])
+                chunks += 1
+                if len(data) >= total or chunks == SCENE_CHUNKS_PER_REQUEST:
+                    break
+            if len(data) >= total:
+                return data.decode("utf-8")
+
+    def scene(self) -> Dict[str, Any]:
+        """The scene the server runs, parsed: `scene["body"]`, `scene["joint"]`
+        (lists of tables, in index order), `scene["sim"]`, ..."""
+        return _toml.loads(self.scene_toml())
+
+
+class Names:
+    """Bodies, joints and motors of a server's scene by name, in the index
+    order of the state arrays and of `Controller.send`."""
+
+    def __init__(self, scene: Dict[str, Any]):
+        self.scene = scene
+        self.bodies: List[str] = [b["name"] for b in scene.get("body", [])]
+        self.joints: List[str] = [j["name"] for j in scene.get("joint", [])]
+        # The joints a motor target drives (the actuators of the scene).
+        self.motors: List[str] = [j["name"] for j in scene.get("joint", []) if "motor" in j]
+        self._body = {n: i for i, n in enumerate(self.bodies)}
+        self._joint = {n: i for i, n in enumerate(self.joints)}
+
+    def body(self, name: Union[str, int]) -> int:
+        """The index of body `name` (an index passes through)."""
+        if isinstance(name, int):
+            return name
+        try:
+            return self._body[name]
+        except KeyError:
+            raise KeyError(f"no body named {name!r}; the bodies are {self.bodies}") from None
+
+    def joint(self, name: Union[str, int]) -> int:
+        """The index of joint `name` (an index passes through)."""
+        if isinstance(name, int):
+            return name
+        try:
+            return self._joint[name]
+        except KeyError:
+            raise KeyError(f"no joint named {name!r}; the joints are {self.joints}") from None
+
 
 class _StateReader:
     def __init__(self, conn: Connection, what: str = "state", buffer: int = 2):
@@ -239,6 +321,14 @@ class Controller:
         ).publisher_builder().initial_max_slice_len(
             max(1, (TORQUE_WORDS + MOTOR_WORDS) * joints + IMPULSE_WORDS * 8)
         ).allocation_strategy(iox2.AllocationStrategy.PowerOfTwo).create()
+        # The scene before the join: its names for `send` and the user.
+        self.scene = self.connection.scene()
+        self.names = Names(self.scene)
+        self.bodies, self.joints, self.motors = (
+            self.names.bodies,
+            self.names.joints,
+            self.names.motors,
+        )
         self.info = self.connection.request(CMD_JOIN, role=ROLE_CONTROLLER)
         self.id = self.info.controller_id
         self.joined = True
@@ -310,16 +400,20 @@ class Controller:
 
     def send(
         self,
-        torques: Mapping[int, Sequence[float]] = {},
-        impulses: Mapping[int, Tuple[Sequence[float], Sequence[float]]] = {},
-        motors: Mapping[int, float] = {},
+        torques: Mapping[Union[int, str], Sequence[float]] = {},
+        impulses: Mapping[Union[int, str], Tuple[Sequence[float], Sequence[float]]] = {},
+        motors: Mapping[Union[int, str], float] = {},
     ):
         """Answers the last state: joint efforts (world frame, held until
         changed) by joint index, a torque in N m, or for a prismatic joint
         a force in N at its body_b's anchor; one-step body impulses
         (linear N s, angular N m s) by body index; and motor targets (rad/s
         or m/s, held until changed) by the index of a joint with a
-        motor."""
+        motor. Joints and bodies may be named instead of indexed
+        (`torques={"shoulder": ...}`)."""
+        torques = {self.names.joint(j): t for j, t in torques.items()}
+        impulses = {self.names.body(b): v for b, v in impulses.items()}
+        motors = {self.names.joint(j): v for j, v in motors.items()}
         state = self.last
         step = state.step if state is not None else 0
         self._sequence += 1
@@ -369,6 +463,13 @@ class Monitor:
     def __init__(self, name: str = "default", buffer: int = 1, every: bool = False):
         self.connection = Connection(name)
         self.name = name
+        self.scene = self.connection.scene()
+        self.names = Names(self.scene)
+        self.bodies, self.joints, self.motors = (
+            self.names.bodies,
+            self.names.joints,
+            self.names.motors,
+        )
         self._reader = _StateReader(
             self.connection, "state-every" if every else "state", buffer
         )

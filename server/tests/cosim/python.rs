@@ -99,3 +99,46 @@ fn the_python_package_reads_numpy_states_to_the_bit() {
         assert_eq!(got, want, "step {step}");
     }
 }
+
+/// The Python blocks of README.md and python/README.md, as a user pastes
+/// them beside the serve command the README gives (issue 46, point 6): each
+/// joins, answers every step until the server's end and, in the package's,
+/// reads the scene's names and sends by name.
+#[test]
+fn the_readmes_python_runs_against_a_server() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    for (k, readme) in ["README.md", "python/README.md"].iter().enumerate() {
+        let text = std::fs::read_to_string(root.join(readme)).unwrap();
+        let code = text
+            .split("```python\n")
+            .nth(1)
+            .and_then(|s| s.split("```").next())
+            .unwrap_or_else(|| panic!("{readme} has a python block"));
+        assert!(code.contains("\"lab\""), "{readme}: the server name");
+        let (server, dir, name) = serve_test(
+            &format!("readme-py-{k}"),
+            &["--controllers", "1", "--duration", "1"],
+        );
+        let code = code.replace("\"lab\"", &format!("{name:?}"));
+        let out = Command::new("python3")
+            .args(["-c", &code])
+            .output()
+            .unwrap();
+        let printed = String::from_utf8_lossy(&out.stdout).into_owned()
+            + &String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{readme}: {printed}");
+        if readme.starts_with("python") {
+            assert!(printed.contains("protocol 4"), "{printed}");
+            assert!(
+                printed.contains("joints ['shoulder', 'elbow']"),
+                "{printed}"
+            );
+        }
+        let (status, stderr) = server.finish();
+        assert!(status.success(), "{stderr}");
+        let s = summary(dir.path());
+        assert_eq!(s["steps"], 1000, "{s}");
+        assert_eq!(s["inputs_applied"], 1000, "{readme}: {s}");
+        assert_eq!(s["inputs_rejected"], serde_json::json!({}), "{s}");
+    }
+}
