@@ -79,7 +79,9 @@ impl Connection {
     }
 
     /// Sends one request and waits for its answer; an error status becomes
-    /// [`ClientError::Refused`].
+    /// [`ClientError::Refused`]. The version and node id are this
+    /// connection's; `pid` 0 is this process's (another is sent as it is:
+    /// the server trusts neither, see docs/protocol.md).
     pub fn request(
         &self,
         req: ControlRequest,
@@ -101,7 +103,9 @@ impl Connection {
         let id = self.node.id().value();
         req.node_id_lo = id as u64;
         req.node_id_hi = (id >> 64) as u64;
-        req.pid = u64::from(std::process::id());
+        if req.pid == 0 {
+            req.pid = u64::from(std::process::id());
+        }
         let start = Instant::now();
         let mut check = GoneCheck::new();
         // A request no server took (its buffer full, or the server between

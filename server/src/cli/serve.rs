@@ -312,7 +312,9 @@ fn report(
                     println!("output       {}", out.display());
                 }
             }
-            if matches!(ending, Ending::Aborted | Ending::Failed) || c.failures > 0 {
+            // Failures the run went on from (a resume with new inputs, a
+            // reset, a restore) leave it a success; the count says them.
+            if matches!(ending, Ending::Aborted | Ending::Failed) || c.unrecovered {
                 ExitCode::from(EXIT_FAILED)
             } else {
                 ExitCode::SUCCESS

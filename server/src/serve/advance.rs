@@ -62,6 +62,7 @@ impl Server {
             // with the same inputs (a re-run gives the same failure): it
             // pauses or stops, and the failure is counted and logged once.
             self.c.failures += 1;
+            self.c.unrecovered = true;
             let policy = self.opts.on_failure;
             tracing::error!(
                 "step {}: the solver failed ({e}); the state did not advance; --on-failure {}: {}",
@@ -85,6 +86,7 @@ impl Server {
             }
         } else {
             self.c.steps += 1;
+            self.c.unrecovered = false;
             if let Some(fb) = report.fallback {
                 // Rate-limited: the first, then every 1000th.
                 let n = self.c.ladder.fell_back();
@@ -148,6 +150,7 @@ impl Server {
             "solver": self.engine.model().params.solver.as_str(),
             "model_hash": format!("{:016x}", self.model_hash),
             "failures": c.failures,
+            "ended_on_failure": c.unrecovered,
             "on_failure": self.opts.on_failure.as_str(),
             "ladder": crate::output::ladder_json(&c.ladder),
             "fallback_steps": c.ladder.fell_back(),

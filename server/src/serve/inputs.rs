@@ -270,10 +270,21 @@ impl Server {
                             input.step
                         );
                     }
-                } else if input.controller_id != 0 {
-                    tracing::debug!(
-                        "input from unknown controller {} ({name})",
-                        input.controller_id
+                } else if !self.unjoined_logged.contains(&(origin, r.reason)) {
+                    // A process that is no joined controller: logged once
+                    // per sender and reason (issue 46: not logged at all),
+                    // with the pid of the sender's node.
+                    if self.unjoined_logged.len() < 64 {
+                        self.unjoined_logged.push((origin, r.reason));
+                    }
+                    let pid = self
+                        .svc
+                        .publisher_pid(origin)
+                        .map_or("unknown".to_string(), |p| p.to_string());
+                    tracing::warn!(
+                        "rejected an input from a process that is not a joined controller (pid {pid}, controller id {}, step {}: {name}); further ones of this sender and reason are counted, not logged",
+                        input.controller_id,
+                        input.step
                     );
                 }
             }

@@ -168,6 +168,10 @@ pub struct Counters {
     /// Failed steps, each counted once (the policy pauses or stops the
     /// run, so a step is tried again only after a command).
     pub failures: u64,
+    /// The last step tried failed and no step, reset or restore came
+    /// after it: the run ended on a failure (exit status 1). A run that
+    /// failed and went on is a recovered one (exit 0, `failures` counts).
+    pub unrecovered: bool,
     /// The solve ladder's counts, fallbacks included (`engine::solver::fallback`).
     pub ladder: crate::engine::LadderCounts,
     pub controllers_joined: u64,
@@ -276,6 +280,9 @@ struct Server {
     frame_out: Instant,
     /// The step whose state the files hold last (`--record-every`).
     last_written: Option<u64>,
+    /// Senders (input publisher, reason) of rejected inputs that are no
+    /// joined controller, logged once each (at most 64 kept).
+    unjoined_logged: Vec<(u128, u32)>,
 }
 
 /// Runs a server on `scene` until `--steps`, a shutdown request or a
@@ -351,6 +358,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         final_published: false,
         frame_out: Instant::now(),
         last_written: None,
+        unjoined_logged: Vec::with_capacity(64),
         engine,
         svc,
         opts,
@@ -526,10 +534,10 @@ impl Server {
                 // published without it, a controller would answer a step
                 // that is never taken (issue 15, defect 7).
                 self.status |= STATUS_SHUTDOWN;
-                self.publish()?;
-                self.final_published = true;
                 // --realtime: the run lasts its simulated time, as before.
                 pace.wait(self.engine.state().t);
+                self.publish()?;
+                self.final_published = true;
                 return Ok(Ending::Steps);
             }
             let t_publish = Instant::now();
@@ -544,13 +552,17 @@ impl Server {
                     self.paused = true;
                 }
             }
+            // --realtime: state k goes out when it is due, so that the
+            // round trip (from the publish) holds no pacing wait (issue
+            // 46: paced after the publish, it held the whole wait).
+            let t_publish = match pace.wait(self.engine.state().t) {
+                true => Instant::now(),
+                false => t_publish,
+            };
             self.publish()?;
             top = Instant::now();
             self.frame_out = top;
             self.c.phases.publish.add(us(t_publish, top));
-            if pace.wait(self.engine.state().t) {
-                top = Instant::now();
-            }
         }
     }
 

@@ -188,17 +188,33 @@ impl Server {
             );
             return Ok(());
         }
+        // The node is the one whose client port sent the request, and the
+        // pid the one in its node id: what the request claims is never
+        // trusted (issue 46: a join whose port had vanished took the node
+        // id it named, another live process's; the log printed any pid a
+        // join claimed). A join whose port is gone has no process to bind.
+        let Some((node, pid)) = self.svc.request_origin(req) else {
+            self.refuse(
+                req,
+                RESP_BAD_REQUEST,
+                "the join's client port is gone: join from a live client",
+            );
+            return Ok(());
+        };
         let id = self.next_id;
         self.next_id += 1;
-        // The node is the one whose client port sent the request; what
-        // the request says is only a fallback (its inputs are bound to
-        // that node's publisher, see `controllers::owns`).
-        let claimed = u128::from(r.node_id_lo) | (u128::from(r.node_id_hi) << 64);
-        let node = self.svc.request_node(req).unwrap_or(claimed);
         let joints = self.engine.model().joints.len();
-        self.slots.push(Slot::new(id, node, r.pid, joints));
+        let pid = pid.unwrap_or(0);
+        self.slots.push(Slot::new(id, node, pid, joints));
         self.c.controllers_joined += 1;
-        tracing::info!("controller {id} (pid {}) joined", r.pid);
+        if r.pid == pid {
+            tracing::info!("controller {id} (pid {pid}) joined");
+        } else {
+            tracing::info!(
+                "controller {id} (pid {pid}) joined; its request claimed pid {}",
+                r.pid
+            );
+        }
         self.respond(
             req,
             ControlResponse {
@@ -221,6 +237,8 @@ impl Server {
             for s in &mut self.slots {
                 s.answered = None;
             }
+            // A failed step is behind a reset or restore.
+            self.c.unrecovered = false;
         }
         match r.command {
             CMD_RESET => {

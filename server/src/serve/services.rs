@@ -293,6 +293,25 @@ impl Services {
         node
     }
 
+    /// The process id of the node of input publisher `publisher`, from
+    /// iceoryx2's node id (which holds its creator's pid), not from what
+    /// any message claims.
+    pub fn publisher_pid(&self, publisher: u128) -> Option<u64> {
+        let mut pid = None;
+        self.input_service.dynamic_config().list_publishers(|p| {
+            if p.publisher_id.value() == publisher {
+                pid = p
+                    .node_id
+                    .pid::<ipc::Service>()
+                    .ok()
+                    .map(|x| x.value() as u64);
+                return CallbackProgression::Stop;
+            }
+            CallbackProgression::Continue
+        });
+        pid
+    }
+
     /// Whether input publisher `publisher` is still connected (a process
     /// that ends normally removes its ports as it exits).
     pub fn publisher_connected(&self, publisher: u128) -> bool {
@@ -302,16 +321,27 @@ impl Services {
     /// The node that sent control request `req`, read from the control
     /// service's ports rather than from what the request claims.
     pub fn request_node(&self, req: &Request) -> Option<u128> {
+        self.request_origin(req).map(|(node, _)| node)
+    }
+
+    /// The node that sent control request `req` and its process id (from
+    /// the node id); `None` when its client port is gone.
+    pub fn request_origin(&self, req: &Request) -> Option<(u128, Option<u64>)> {
         let client = req.origin();
-        let mut node = None;
+        let mut found = None;
         self.control_service.dynamic_config().list_clients(|c| {
             if c.client_id == client {
-                node = Some(c.node_id.value());
+                let pid = c
+                    .node_id
+                    .pid::<ipc::Service>()
+                    .ok()
+                    .map(|x| x.value() as u64);
+                found = Some((c.node_id.value(), pid));
                 return CallbackProgression::Stop;
             }
             CallbackProgression::Continue
         });
-        node
+        found
     }
 
     /// The next control request.

@@ -298,3 +298,87 @@ fn a_monitor_that_never_reads_does_not_block_the_server() {
     // Nor the trajectory: the offline run without inputs.
     assert_eq!(positions(dir.path(), "upper"), offline(3000, |_| None));
 }
+
+/// A server whose log (stderr, not quiet, at level info) the test reads.
+fn logged_server(name: &str, dir: &Path, extra: &[&str]) -> ServerProc {
+    let child = Command::new(EXE)
+        .args(["serve", "--name", name, "--forever", "--out"])
+        .arg(dir)
+        .args(extra)
+        .env("RUST_LOG", "info,iceoryx2_bb_loggers=error")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start cosim-server serve");
+    let mut s = ServerProc {
+        name: name.into(),
+        child: Some(child),
+    };
+    s.wait_ready();
+    s
+}
+
+/// Issue 46: the log names the pid of the process that joined, read from
+/// its iceoryx2 node, not the pid its request claims; and an input from a
+/// process that never joined is logged (it was counted only).
+#[test]
+fn the_log_names_the_real_pid_and_inputs_from_processes_that_did_not_join() {
+    let dir = TempDir::new("real-pid");
+    let name = unique("real-pid");
+    let server = logged_server(&name, dir.path(), &[]);
+    let conn = Connection::connect(&name).expect("connect");
+    let r = conn
+        .request(
+            cosim_shared::wire::ControlRequest {
+                command: cosim_shared::wire::CMD_JOIN,
+                role: cosim_shared::wire::ROLE_CONTROLLER,
+                pid: 4_242_424,
+                ..Default::default()
+            },
+            Duration::from_secs(5),
+        )
+        .expect("join");
+    assert_eq!(r.status, 0);
+    let left = conn
+        .request(
+            cosim_shared::wire::ControlRequest {
+                command: cosim_shared::wire::CMD_LEAVE,
+                controller_id: r.controller_id,
+                ..Default::default()
+            },
+            Duration::from_secs(5),
+        )
+        .expect("leave");
+    assert_eq!(left.status, 0);
+    // An input with an id no controller has, then this controller's own
+    // answer from the same publisher: once the next state comes, the
+    // server has read both, in order.
+    let mut c = Controller::join(&name, WaitMode::Block).expect("a controller");
+    let first = c.next_state(Duration::from_secs(10)).expect("state").step;
+    let input = InputFrame {
+        controller_id: 77,
+        step: first,
+        version: cosim_shared::wire::PROTOCOL_VERSION,
+        ..Default::default()
+    };
+    c.send_raw(&input).expect("send");
+    c.send(InputFrame::default()).expect("answer");
+    let next = c.next_state(Duration::from_secs(10)).expect("state").step;
+    assert!(next > first);
+    conn.shutdown().expect("shutdown");
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    let me = std::process::id();
+    assert!(
+        stderr.contains(&format!(
+            "controller 1 (pid {me}) joined; its request claimed pid 4242424"
+        )),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains(&format!(
+            "not a joined controller (pid {me}, controller id 77"
+        )),
+        "{stderr}"
+    );
+}
