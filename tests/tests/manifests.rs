@@ -14,6 +14,7 @@ const CRATES: [(&str, &[&str]); 3] = [
     (
         "figures",
         &[
+            "ab_glyph",
             "color_quant",
             "cosim-engine",
             "cosim-foxglove",
@@ -21,6 +22,7 @@ const CRATES: [(&str, &[&str]); 3] = [
             "gif",
             "nalgebra",
             "plotters",
+            "plotters-backend",
             "serde_json",
         ],
     ),

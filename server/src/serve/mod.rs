@@ -515,9 +515,9 @@ impl Server {
             self.c.phases.wait.add(us(t_wait, t_step));
             if self.paused {
                 // --on-miss pause: this step waits for `resume`.
+                self.frame_out = Instant::now();
                 self.publish()?;
                 top = Instant::now();
-                self.frame_out = top;
                 continue;
             }
             let compute = self.take_step(k)?;
@@ -559,9 +559,13 @@ impl Server {
                 true => Instant::now(),
                 false => t_publish,
             };
+            // The round trip starts before the send: the frame is visible
+            // once the send is under way, and a server preempted between
+            // the send and a clock read after it read a few us for a
+            // controller's 0.3 ms (seen with every core busy).
+            self.frame_out = Instant::now();
             self.publish()?;
             top = Instant::now();
-            self.frame_out = top;
             self.c.phases.publish.add(us(t_publish, top));
         }
     }
@@ -575,8 +579,8 @@ impl Server {
             changed |= self.change_state(&req)?;
         }
         if changed {
-            self.publish()?;
             self.frame_out = Instant::now();
+            self.publish()?;
         }
         if self.shutdown {
             return Ok(Flow::Stop(Ending::Shutdown));
