@@ -13,11 +13,13 @@
 //!   the fixed world; a root link with mass is welded to the world (a
 //!   fixed base, MuJoCo's default for a robot without a free joint);
 //! - `revolute`, `continuous`, `prismatic` and `fixed` joints; a
-//!   revolute's or prismatic's `<limit lower upper>` is its `range`, its
-//!   `effort` (> 0) a velocity motor's bound with target 0 (the robot
-//!   holds its pose until a controller sets motor targets, as Rapier's
-//!   and ODE's motors); a joint's two links do not collide (MuJoCo's
-//!   parent-child filter);
+//!   revolute's or prismatic's `<limit lower upper>` is its `range`; the
+//!   joints are passive, as MuJoCo and Drake leave them unless an
+//!   actuator drives them (issue 45: a velocity motor with target 0 made
+//!   of every `effort` held a pendulum still, PyBullet's best-known
+//!   gotcha); `effort` and `velocity` bound actuators, which the URDF has
+//!   none of; a joint's two links do not collide (MuJoCo's parent-child
+//!   filter);
 //! - a floor plane at z = 0 and the scene file's defaults (h = 1 ms, 3 s).
 //!
 //! Anything else (a mesh, several collisions, a floating, planar or
@@ -274,13 +276,6 @@ pub fn scene(text: &str, file: &str, name: &str) -> Result<Scene, SceneError> {
             let (lo, hi) = (j.limit.lower, j.limit.upper);
             if j.joint_type != T::Continuous && lo.is_finite() && hi.is_finite() && lo < hi {
                 let _ = writeln!(s, "range = [{lo:?}, {hi:?}]");
-            }
-            if j.limit.effort > 0.0 && j.limit.effort.is_finite() {
-                let _ = writeln!(
-                    s,
-                    "motor = {{ speed = 0.0, max_effort = {:?} }}",
-                    j.limit.effort
-                );
             }
         }
         s.push('\n');
