@@ -333,6 +333,20 @@ pub struct Recorded {
     pub dropped: u64,
 }
 
+impl Recorded {
+    /// Writes frame `f` into `rec` and counts it.
+    fn take(&mut self, rec: &mut Recorder, f: &StateFrame) -> std::io::Result<()> {
+        rec.frame(f)?;
+        self.first.get_or_insert(f.step);
+        self.last = Some(f.step);
+        self.frames += 1;
+        if self.frames.is_multiple_of(1000) {
+            rec.flush()?;
+        }
+        Ok(())
+    }
+}
+
 pub fn record(
     name: &str,
     out: &Path,
@@ -346,56 +360,57 @@ pub fn record(
     std::fs::create_dir_all(out)?;
     std::fs::write(out.join("scene.toml"), &toml)?;
     let mut rec = Recorder::create(out, scene, mcap)?;
-    if lockstep {
-        let r = record_lockstep(name, &mut rec, frames)?;
-        rec.finish()?;
-        return Ok(r);
-    }
+    let r = match lockstep {
+        true => record_lockstep(name, &mut rec, frames)?,
+        false => record_monitor(name, &mut rec, frames)?,
+    };
+    rec.finish()?;
+    Ok(r)
+}
+
+/// What was recorded stays: the files end at the last frame.
+fn server_gone(name: &str, r: &Recorded) {
+    eprintln!(
+        "warning: the server '{name}' is gone; the recording ends at frame {}",
+        r.frames
+    );
+}
+
+/// `record` as a monitor: never slows the server, counts what it missed.
+fn record_monitor(
+    name: &str,
+    rec: &mut Recorder,
+    frames: Option<u64>,
+) -> Result<Recorded, Box<dyn std::error::Error>> {
     let m = Monitor::open(name, crate::services::MAX_STATE_BUFFER)?;
     let mut r = Recorded::default();
-    let mut count = 0u64;
     let mut last_seq = None;
-    let mut dropped = 0u64;
-    loop {
-        if frames.is_some_and(|n| count >= n) {
-            break;
-        }
+    while frames.is_none_or(|n| r.frames < n) {
         let f = match m.next(Duration::from_millis(500)) {
             Ok(f) => f,
             Err(ClientError::Timeout { .. }) => continue,
             Err(ClientError::Interrupted) => break,
-            // What was recorded stays: the files end at the last frame.
             Err(ClientError::ServerGone { name }) => {
-                eprintln!(
-                    "warning: the server '{name}' is gone; the recording ends at frame {count}"
-                );
+                server_gone(&name, &r);
                 break;
             }
             Err(e) => return Err(e.into()),
         };
         if let Some(s) = last_seq {
-            dropped += f.sequence.saturating_sub(s + 1);
+            r.dropped += f.sequence.saturating_sub(s + 1);
         }
         last_seq = Some(f.sequence);
-        rec.frame(&f)?;
-        r.first.get_or_insert(f.step);
-        r.last = Some(f.step);
-        count += 1;
+        r.take(rec, &f)?;
         if f.status & STATUS_SHUTDOWN != 0 {
             break;
         }
-        if count.is_multiple_of(1000) {
-            rec.flush()?;
-        }
     }
-    rec.finish()?;
-    r.frames = count;
-    r.dropped = dropped;
     Ok(r)
 }
 
 /// `record --lockstep`: every frame, as a controller that answers each
-/// with no input (the server waits for it as for any controller).
+/// with no input (the server waits for it as for any controller; it leaves
+/// when dropped).
 fn record_lockstep(
     name: &str,
     rec: &mut Recorder,
@@ -404,44 +419,25 @@ fn record_lockstep(
     let mut c = Controller::join(name, WaitMode::Hybrid)?;
     let mut r = Recorded::default();
     let mut input = InputFrame::default();
-    loop {
-        if frames.is_some_and(|n| r.frames >= n) {
-            break;
-        }
-        let f = match c.next_state_ref(Duration::from_millis(500)) {
-            Ok(f) => f,
+    while frames.is_none_or(|n| r.frames < n) {
+        match c.next_state_ref(Duration::from_millis(500)) {
+            Ok(f) => r.take(rec, f)?,
             Err(ClientError::Timeout { .. }) => continue,
             // The last frame, with the final state.
             Err(ClientError::Shutdown) => {
                 if let Some(f) = c.last_state() {
-                    rec.frame(f)?;
-                    r.first.get_or_insert(f.step);
-                    r.last = Some(f.step);
-                    r.frames += 1;
+                    r.take(rec, f)?;
                 }
                 break;
             }
             Err(ClientError::Interrupted) => break,
             Err(ClientError::ServerGone { name }) => {
-                eprintln!(
-                    "warning: the server '{name}' is gone; the recording ends at frame {}",
-                    r.frames
-                );
+                server_gone(&name, &r);
                 break;
             }
             Err(e) => return Err(e.into()),
-        };
-        rec.frame(f)?;
-        r.first.get_or_insert(f.step);
-        r.last = Some(f.step);
-        r.frames += 1;
-        if r.frames.is_multiple_of(1000) {
-            rec.flush()?;
         }
         c.send_ref(&mut input)?;
-    }
-    if frames.is_some() {
-        let _ = c.leave();
     }
     Ok(r)
 }

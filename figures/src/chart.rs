@@ -56,7 +56,7 @@ pub struct Panel {
     /// A force panel (or another whose spikes would flatten the rest, the
     /// timings): its scale is chosen from its series when drawn
     /// (`settle`), also after two runs' series were put together.
-    pub forces: bool,
+    pub auto_symlog: bool,
     /// A force panel's unit: N, or N m for torques.
     pub unit: &'static str,
 }
@@ -68,7 +68,7 @@ impl Panel {
             series,
             counts: false,
             scale: Scale::Linear,
-            forces: false,
+            auto_symlog: false,
             unit: "N",
         }
     }

@@ -64,7 +64,7 @@ impl Panel {
             series,
             counts,
             scale,
-            forces,
+            auto_symlog,
             unit,
         } = self;
         series
@@ -74,7 +74,7 @@ impl Panel {
                 series: vec![s],
                 counts,
                 scale,
-                forces,
+                auto_symlog,
                 unit,
             })
             .collect()
@@ -324,7 +324,7 @@ pub fn specs(run: &RunData) -> Vec<Spec> {
         // and the machine's hiccups would flatten the rest: the force
         // panels' symlog rule.
         vec![Panel {
-            forces: true,
+            auto_symlog: true,
             unit: "us",
             ..Panel::new(
                 "time",

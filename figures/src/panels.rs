@@ -238,7 +238,7 @@ pub(crate) fn joint_force_panels(run: &RunData, h: f64) -> Vec<Panel> {
 /// A force panel of quantity `what` (its unit added when settled).
 pub(crate) fn force_panel(what: &str, series: Vec<Series>) -> Panel {
     Panel {
-        forces: true,
+        auto_symlog: true,
         ..Panel::new(what, series)
     }
 }
@@ -249,10 +249,10 @@ impl Panel {
     /// values), so that one impact does not flatten resting contact; its
     /// linear range is that typical force, rounded down to a power of ten.
     pub(crate) fn settle(mut self) -> Panel {
-        if !self.forces {
+        if !self.auto_symlog {
             return self;
         }
-        self.forces = false;
+        self.auto_symlog = false;
         let mut values: Vec<f64> = self
             .series
             .iter()

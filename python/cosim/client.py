@@ -130,8 +130,10 @@ class Connection:
     def notify(self):
         self._wake.notify()
 
-    def request(self, command: int, timeout: float = 5.0, **fields) -> ControlResponse:
-        """Sends a control request and waits for its answer."""
+    def _responses(self, command: int, timeout: float, what: str, **fields):
+        """Sends a control request; yields its responses (a status other
+        than 0 raises `Refused`) until the caller stops, or raises
+        `Timeout` when none comes within `timeout` of the request."""
         node_id = self.node.id.value
         req = ControlRequest(
             version=PROTOCOL_VERSION,
@@ -144,15 +146,22 @@ class Connection:
         pending = self._client.send_copy(req)
         self._wake.notify()
         deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
+        while True:
             response = pending.receive()
-            if response is not None:
-                r = response.payload().contents
-                if r.status != 0:
-                    raise Refused(r.status, r.text())
-                return ControlResponse.from_buffer_copy(r)
-            self.node.wait(iox2.Duration.from_micros(100))
-        raise Timeout(f"no answer from the server '{self.name}' within {timeout} s")
+            if response is None:
+                if time.monotonic() > deadline:
+                    raise Timeout(f"no {what} from the server '{self.name}' within {timeout} s")
+                self.node.wait(iox2.Duration.from_micros(100))
+                continue
+            r = response.payload().contents
+            if r.status != 0:
+                raise Refused(r.status, r.text())
+            yield r
+
+    def request(self, command: int, timeout: float = 5.0, **fields) -> ControlResponse:
+        """Sends a control request and waits for its answer."""
+        r = next(self._responses(command, timeout, "answer", **fields))
+        return ControlResponse.from_buffer_copy(r)
 
     def info(self) -> ControlResponse:
         return self.request(CMD_INFO)
@@ -171,32 +180,12 @@ class Connection:
 
     def scene_toml(self, timeout: float = 5.0) -> str:
         """The scene the server runs, as TOML text (its scene.toml): asked
-        for in chunks of MESSAGE_LEN bytes, from the byte reached on."""
+        for in pages of chunks of MESSAGE_LEN bytes, from the byte reached
+        on (docs/protocol.md)."""
         data = bytearray()
-        node_id = self.node.id.value
         while True:
-            req = ControlRequest(
-                version=PROTOCOL_VERSION,
-                command=CMD_SCENE,
-                count=len(data),
-                node_id_lo=node_id & (2**64 - 1),
-                node_id_hi=node_id >> 64,
-                pid=os.getpid(),
-            )
-            pending = self._client.send_copy(req)
-            self._wake.notify()
-            deadline = time.monotonic() + timeout
-            chunks, total = 0, None
-            while True:
-                response = pending.receive()
-                if response is None:
-                    if time.monotonic() > deadline:
-                        raise Timeout(f"no scene from the server '{self.name}' within {timeout} s")
-                    self.node.wait(iox2.Duration.from_micros(100))
-                    continue
-                r = response.payload().contents
-                if r.status != 0:
-                    raise Refused(r.status, r.text())
+            chunks, total = 0, 0
+            for r in self._responses(CMD_SCENE, timeout, "scene", count=len(data)):
                 total = r.value
                 take = max(0, min(MESSAGE_LEN, total - len(data)))
                 data += bytes(r.message[:take])
@@ -210,6 +199,24 @@ class Connection:
         """The scene the server runs, parsed: `scene["body"]`, `scene["joint"]`
         (lists of tables, in index order), `scene["sim"]`, ..."""
         return _toml.loads(self.scene_toml())
+
+
+class _Named:
+    """`bodies`, `joints` and `motors` of a client's `names`."""
+
+    names: "Names"
+
+    @property
+    def bodies(self) -> List[str]:
+        return self.names.bodies
+
+    @property
+    def joints(self) -> List[str]:
+        return self.names.joints
+
+    @property
+    def motors(self) -> List[str]:
+        return self.names.motors
 
 
 class Names:
@@ -292,7 +299,7 @@ class _StateReader:
         self._ready.timed_wait(iox2.Duration.from_secs_f64(max(seconds, 0.0)))
 
 
-class Controller:
+class Controller(_Named):
     """A controller in the lockstep of server `name`: `next_state()`, then
     `send(...)`, each step. Leaves on `leave()`, at the end of a `with`
     block, or at interpreter exit."""
@@ -324,11 +331,6 @@ class Controller:
         # The scene before the join: its names for `send` and the user.
         self.scene = self.connection.scene()
         self.names = Names(self.scene)
-        self.bodies, self.joints, self.motors = (
-            self.names.bodies,
-            self.names.joints,
-            self.names.motors,
-        )
         self.info = self.connection.request(CMD_JOIN, role=ROLE_CONTROLLER)
         self.id = self.info.controller_id
         self.joined = True
@@ -455,7 +457,7 @@ class Controller:
             self._answered = (state.step, state.sequence)
 
 
-class Monitor:
+class Monitor(_Named):
     """Reads the state without joining: it never slows the server. With
     `every=True`, the decimated stream of a server started with
     `--publish-every N`."""
@@ -465,11 +467,6 @@ class Monitor:
         self.name = name
         self.scene = self.connection.scene()
         self.names = Names(self.scene)
-        self.bodies, self.joints, self.motors = (
-            self.names.bodies,
-            self.names.joints,
-            self.names.motors,
-        )
         self._reader = _StateReader(
             self.connection, "state-every" if every else "state", buffer
         )

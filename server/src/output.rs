@@ -21,11 +21,13 @@ pub fn holds_run(dir: &Path) -> bool {
 /// Where a run writes. A folder given (`--out`) that holds a run is
 /// refused unless `overwrite`; the default folder, when it holds one,
 /// gives way to the first free `NAME-2`, `NAME-3`, ... beside it, so that
-/// two runs never write into one folder unasked.
+/// two runs never write into one folder unasked (said on stderr unless
+/// `quiet`).
 pub fn run_folder(
     given: Option<&Path>,
     default: PathBuf,
     overwrite: bool,
+    quiet: bool,
 ) -> Result<PathBuf, String> {
     if let Some(dir) = given {
         if holds_run(dir) && !overwrite {
@@ -40,10 +42,17 @@ pub fn run_folder(
         return Ok(default);
     }
     let base = default.as_os_str().to_string_lossy().into_owned();
-    (2..)
+    let free = (2..)
         .map(|k| PathBuf::from(format!("{base}-{k}")))
         .find(|d| !holds_run(d))
-        .ok_or_else(|| format!("no free folder beside {base}"))
+        .ok_or_else(|| format!("no free folder beside {base}"))?;
+    if !quiet {
+        eprintln!(
+            "{base} holds an earlier run: writing {} (--overwrite to replace it)",
+            free.display()
+        );
+    }
+    Ok(free)
 }
 pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw,projected,rung,refined,fallback,compliance,energy_refused,islands,largest_island,sleeping,lemke_islands,pgs_islands,max_joint_angle_error,left_out";
 

@@ -282,6 +282,16 @@ pub enum Party {
     Plane(usize),
 }
 
+impl From<Counterpart> for Party {
+    fn from(c: Counterpart) -> Party {
+        match c {
+            Counterpart::Plane(p) => Party::Plane(p),
+            Counterpart::Body(j) => Party::Body(j),
+            Counterpart::World => Party::World,
+        }
+    }
+}
+
 /// The weld group of the world (see `Model::weld`).
 pub const WELDED_TO_WORLD: usize = usize::MAX;
 

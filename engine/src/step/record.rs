@@ -7,7 +7,7 @@ use crate::collision;
 use crate::constraint::{joint, motor};
 use crate::measure::report::{ImpulseKind, ImpulseRecord, StepReport};
 use crate::model::state;
-use crate::model::{Attachment, Counterpart, Party};
+use crate::model::{Attachment, Party};
 use nalgebra::Vector3;
 
 impl Engine {
@@ -90,11 +90,7 @@ impl Engine {
                     else {
                         continue;
                     };
-                    let b = match g.b {
-                        Counterpart::Plane(p) => Party::Plane(p),
-                        Counterpart::Body(j) => Party::Body(j),
-                        Counterpart::World => Party::World,
-                    };
+                    let b = Party::from(g.b);
                     let record = |kind, impulse| ImpulseRecord {
                         kind,
                         index: w.id,
@@ -140,11 +136,7 @@ impl Engine {
         }
         for (i, warm, block) in m.contact_impulses(&ws.contacts) {
             let c = &ws.contacts[m.lcp_contacts[i]];
-            let b = match c.geom.b {
-                Counterpart::Plane(p) => Party::Plane(p),
-                Counterpart::Body(j) => Party::Body(j),
-                Counterpart::World => Party::World,
-            };
+            let b = Party::from(c.geom.b);
             let record = |kind, impulse| ImpulseRecord {
                 kind,
                 index: c.id,

@@ -114,21 +114,14 @@ pub fn run(args: &RunArgs) -> ExitCode {
     let mut model = Model::from_scene(&scene);
     model.params.full = args.full;
     let default = PathBuf::from("out").join(scene.name());
-    let out = match crate::output::run_folder(args.out.as_deref(), default.clone(), args.overwrite)
-    {
+    let given = args.out.as_deref();
+    let out = match crate::output::run_folder(given, default, args.overwrite, args.quiet) {
         Ok(o) => o,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
-    if args.out.is_none() && out != default && !args.quiet {
-        eprintln!(
-            "{} holds an earlier run: writing {} (--overwrite to replace it)",
-            default.display(),
-            out.display()
-        );
-    }
     // The scene as run (overrides applied) goes with the outputs, so that
     // `plot` and later tools can read the run from its folder alone.
     let written = std::fs::create_dir_all(&out)

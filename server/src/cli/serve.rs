@@ -261,6 +261,7 @@ fn options(args: &ServeArgs) -> Result<(cosim_shared::Scene, ServeOptions), Stri
                     None,
                     PathBuf::from("out").join(format!("serve-{}", args.name)),
                     args.overwrite,
+                    args.quiet,
                 )?,
             }),
         },
@@ -348,21 +349,13 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
     // A name of its own: two demos at once do not meet.
     let name = format!("demo-{}", std::process::id());
     let default = PathBuf::from("out/demo");
-    let out = match crate::output::run_folder(args.out.as_deref(), default.clone(), args.overwrite)
-    {
+    let out = match crate::output::run_folder(args.out.as_deref(), default, args.overwrite, false) {
         Ok(o) => o,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::from(EXIT_BAD_INPUT);
         }
     };
-    if args.out.is_none() && out != default {
-        eprintln!(
-            "{} holds an earlier run: writing {} (--overwrite to replace it)",
-            default.display(),
-            out.display()
-        );
-    }
     let serve_args = ServeArgs {
         scene: None,
         name: name.clone(),

@@ -62,7 +62,6 @@ impl Server {
             // with the same inputs (a re-run gives the same failure): it
             // pauses or stops, and the failure is counted and logged once.
             self.c.failures += 1;
-            self.c.unrecovered = true;
             let policy = self.opts.on_failure;
             tracing::error!(
                 "step {}: the solver failed ({e}); the state did not advance; --on-failure {}: {}",
@@ -86,7 +85,6 @@ impl Server {
             }
         } else {
             self.c.steps += 1;
-            self.c.unrecovered = false;
             if let Some(fb) = report.fallback {
                 // Rate-limited: the first, then every 1000th.
                 let n = self.c.ladder.fell_back();

@@ -169,8 +169,9 @@ pub struct Counters {
     /// run, so a step is tried again only after a command).
     pub failures: u64,
     /// The last step tried failed and no step, reset or restore came
-    /// after it: the run ended on a failure (exit status 1). A run that
-    /// failed and went on is a recovered one (exit 0, `failures` counts).
+    /// after it (the last report is that step's; reset and restore clear
+    /// it): the run ended on a failure (exit status 1). A run that failed
+    /// and went on is a recovered one (exit 0, `failures` counts).
     pub unrecovered: bool,
     /// The solve ladder's counts, fallbacks included (`engine::solver::fallback`).
     pub ladder: crate::engine::LadderCounts,
@@ -388,6 +389,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         f.logs.flush()?;
     }
     let ending = ending?;
+    s.c.unrecovered = s.last_report.is_some_and(|r| r.error.is_some());
     s.write_summary(ending, wall)?;
     Ok((s.c.clone(), ending, wall))
 }

@@ -237,8 +237,6 @@ impl Server {
             for s in &mut self.slots {
                 s.answered = None;
             }
-            // A failed step is behind a reset or restore.
-            self.c.unrecovered = false;
         }
         match r.command {
             CMD_RESET => {

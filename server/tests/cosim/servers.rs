@@ -192,11 +192,7 @@ fn a_killed_servers_logs_replay_to_the_cut_and_summarize_rebuilds_a_summary() {
     assert!(text.contains("every state identical"), "{text}");
     assert!(text.contains("cut off at line"), "{text}");
     assert!(text.contains("no summary.json"), "{text}");
-    let out = Command::new(EXE)
-        .arg("summarize")
-        .arg(dir.path())
-        .output()
-        .unwrap();
+    let out = summarize(dir.path());
     assert!(out.status.success(), "{out:?}");
     let s = summary(dir.path());
     assert_eq!(s["rebuilt_from_files"], true, "{s}");
@@ -207,11 +203,7 @@ fn a_killed_servers_logs_replay_to_the_cut_and_summarize_rebuilds_a_summary() {
     assert_eq!(s["failures"], 0, "{s}");
     assert!(s["files"]["replay.csv"]["cut_at_line"].is_u64(), "{s}");
     // The rebuilt summary is never written over, nor a server's own.
-    let again = Command::new(EXE)
-        .arg("summarize")
-        .arg(dir.path())
-        .output()
-        .unwrap();
+    let again = summarize(dir.path());
     assert!(!again.status.success());
     assert!(String::from_utf8_lossy(&again.stderr).contains("exists"));
 }
@@ -225,13 +217,18 @@ fn a_server_killed_before_its_first_step_is_summarized() {
     let mut child = server.child.take().unwrap();
     child.kill().unwrap();
     child.wait().unwrap();
-    let out = Command::new(EXE)
-        .arg("summarize")
-        .arg(dir.path())
-        .output()
-        .unwrap();
+    let out = summarize(dir.path());
     assert!(out.status.success(), "{out:?}");
     let s = summary(dir.path());
     assert_eq!(s["steps"], 0, "{s}");
     assert_eq!(s["replayable_steps"], 0, "{s}");
+}
+
+/// `cosim-server summarize DIR`.
+fn summarize(dir: &Path) -> std::process::Output {
+    Command::new(EXE)
+        .arg("summarize")
+        .arg(dir)
+        .output()
+        .expect("run cosim-server summarize")
 }
