@@ -60,3 +60,17 @@ fn a_view_rate_that_is_not_positive_is_refused_by_name() {
         assert!(err.contains("--rate must be a positive"), "{rate}: {err}");
     }
 }
+
+#[path = "../../server/tests/common/synopsis.rs"]
+mod synopsis;
+
+/// The docs' `cosim` synopses name subcommands and options it has (issue
+/// 46, point 1).
+#[test]
+fn every_cosim_synopsis_in_the_docs_is_true() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let (problems, checked) = synopsis::check(&root, "cosim", EXE);
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    // --name, then list ... play: fourteen alternatives in docs/cosim.md.
+    assert!(checked >= 14, "only {checked} synopses found");
+}

@@ -194,6 +194,10 @@ impl Server {
         // id it named, another live process's; the log printed any pid a
         // join claimed). A join whose port is gone has no process to bind.
         let Some((node, pid)) = self.svc.request_origin(req) else {
+            tracing::warn!(
+                "a join whose client port is gone was refused (its request named pid {})",
+                r.pid
+            );
             self.refuse(
                 req,
                 RESP_BAD_REQUEST,

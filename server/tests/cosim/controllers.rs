@@ -382,3 +382,61 @@ fn the_log_names_the_real_pid_and_inputs_from_processes_that_did_not_join() {
         "{stderr}"
     );
 }
+
+/// Issue 46, point 8: a join whose client port is gone when the server
+/// reads it never binds the node its request names (before the fix it took
+/// that node id: here a live one of this process's, which would then have
+/// counted as a joined controller). The request is sent without waking the
+/// server (it waits for a controller in 50 ms sleeps) and its port dropped
+/// at once. Measured: iceoryx2 0.10 discards a request whose client port
+/// dropped before the server read it, so the server never sees it; the
+/// guard in `join` (refuse and log when the origin is not found) covers the
+/// microseconds between its read and its lookup, which no test can hit
+/// from outside.
+#[test]
+fn a_join_whose_client_port_is_gone_never_joins() {
+    use cosim_shared::wire::{
+        services, ControlRequest, ControlResponse, CMD_JOIN, PROTOCOL_VERSION, ROLE_CONTROLLER,
+    };
+    use iceoryx2::prelude::*;
+    let dir = TempDir::new("port-gone");
+    let name = unique("port-gone");
+    let server = logged_server(&name, dir.path(), &["--controllers", "1"]);
+    // A live node whose id the request claims.
+    let other = Connection::connect(&name).expect("connect");
+    let claimed = other.node().id().value();
+    let node = NodeBuilder::new().create::<ipc::Service>().unwrap();
+    let control: ServiceName = services::control(&name).as_str().try_into().unwrap();
+    let service = node
+        .service_builder(&control)
+        .request_response::<ControlRequest, ControlResponse>()
+        .open()
+        .unwrap();
+    let sent = {
+        let client = service.client_builder().create().unwrap();
+        let pending = client
+            .send_copy(ControlRequest {
+                version: PROTOCOL_VERSION,
+                command: CMD_JOIN,
+                role: ROLE_CONTROLLER,
+                node_id_lo: claimed as u64,
+                node_id_hi: (claimed >> 64) as u64,
+                pid: 4_343_434,
+                ..Default::default()
+            })
+            .unwrap();
+        pending.number_of_server_connections()
+    };
+    assert_eq!(sent, 1, "the server's port took the request");
+    // A controller of this process joins: the server's drain that reads
+    // its join reads every request queued before it, the dropped one too.
+    let c = Controller::join(&name, WaitMode::Block).expect("a controller");
+    assert_eq!(c.id(), 1, "the refused join took no id");
+    drop(c);
+    other.shutdown().expect("shutdown");
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    // Never read, or read and refused: never joined.
+    assert!(!stderr.contains("claimed pid 4343434"), "{stderr}");
+    assert_eq!(summary(dir.path())["controllers_joined"], 1);
+}
