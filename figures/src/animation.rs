@@ -346,12 +346,26 @@ fn draw_frame<DB: DrawingBackend>(
             .map_err(e)?;
         }
     }
+    // Every shape of every body at its pose: (body, its shape, centre,
+    // orientation).
+    let pieces: Vec<(usize, usize, Vector3<f64>, UnitQuaternion<f64>)> = (0..model.bodies.len())
+        .flat_map(|b| {
+            let (c, q) = (centre(b), orientation(b));
+            model.bodies[b]
+                .shapes
+                .iter()
+                .enumerate()
+                .map(move |(k, g)| match g.offset {
+                    None => (b, k, c, q),
+                    Some(o) => (b, k, c + q.transform_vector(&o.x), q * o.q),
+                })
+        })
+        .collect();
     if let Some(f) = floor {
-        for b in 0..model.bodies.len() {
-            let shape = &model.bodies[b].shape;
-            let c = centre(b);
+        for &(b, k, c, q) in &pieces {
+            let shape = &model.bodies[b].shapes[k].shape;
             let height = f.normal.dot(&c) - f.offset;
-            if height <= shape.extent(&orientation(b), &f.normal) * 1.001 {
+            if height <= shape.extent(&q, &f.normal) * 1.001 {
                 continue;
             }
             // Along gravity to the plane.
@@ -372,12 +386,12 @@ fn draw_frame<DB: DrawingBackend>(
         }
     }
 
-    // Bodies, farthest first.
-    let mut order: Vec<usize> = (0..model.bodies.len()).collect();
-    order.sort_by(|&a, &b| cam.depth(&centre(b)).total_cmp(&cam.depth(&centre(a))));
-    for b in order {
-        let shape = &model.bodies[b].shape;
-        let (c, q) = (centre(b), orientation(b));
+    // Shapes, farthest first.
+    let mut order = pieces;
+    order.sort_by(|a, b| cam.depth(&b.2).total_cmp(&cam.depth(&a.2)));
+    for (b, k, c, q) in order {
+        let geom = &model.bodies[b].shapes[k];
+        let shape = &geom.shape;
         let base = color(b);
         match *shape {
             Shape::Sphere { radius } => draw_ball(area, cam, &c, radius, base).map_err(e)?,
@@ -446,7 +460,11 @@ fn draw_frame<DB: DrawingBackend>(
             }
         }
         // The body-fixed dot: solid on the near half, a ring on the far
-        // half, so that a turn shows from every side.
+        // half, so that a turn shows from every side (on a body's one
+        // shape at its centre of mass; shapes away from it show the turn).
+        if geom.offset.is_some() {
+            continue;
+        }
         let rp = screen_radius(shape, cam);
         let m = marker(shape, &run.bodies[b].rows[i]);
         let (mx, my) = pix(&m);
@@ -471,7 +489,7 @@ fn draw_frame<DB: DrawingBackend>(
             // Beside the disc's edge at 45 degrees up and right (the text's
             // top-left corner is its position; 13 px tall): the corner of
             // the bounding square left a gap of 0.4 radii on a large body.
-            let rp = (model.bodies[b].shape.bounding_radius() * cam.scale).max(2.0);
+            let rp = (model.bodies[b].bound * cam.scale).max(2.0);
             let edge = (0.71 * rp).round() as i32;
             area.draw(&Text::new(
                 model.bodies[b].name.clone(),

@@ -93,7 +93,7 @@ impl Camera {
             Vector3::repeat(f64::NEG_INFINITY),
         );
         for (b, track) in model.bodies.iter().zip(&run.bodies) {
-            let radius = b.shape.bounding_radius();
+            let radius = b.bound;
             for r in &track.rows {
                 let x = Vector3::new(r[0], r[1], r[2]);
                 lo = lo.inf(&(x - Vector3::repeat(radius)));

@@ -8,7 +8,7 @@
 
 use crate::palette;
 use cosim_shared::scene::WORLD;
-use cosim_shared::{Scene, ShapeDesc};
+use cosim_shared::{PlacedShape, Scene, ShapeDesc};
 use nalgebra::{Quaternion, Unit, UnitQuaternion, Vector3};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -61,6 +61,11 @@ fn vec3(v: &Vector3<f64>) -> Value {
     json!({ "x": v.x, "y": v.y, "z": v.z })
 }
 
+/// A scene's quaternion `[w, x, y, z]`, normalised.
+fn quaternion(q: &[f64; 4]) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
+}
+
 fn quat(q: &UnitQuaternion<f64>) -> Value {
     json!({ "x": q.i, "y": q.j, "z": q.k, "w": q.w })
 }
@@ -111,7 +116,7 @@ fn entity(stamp: &Value, id: &str, parts: &[(&str, Value)]) -> Value {
 #[derive(Debug, Clone)]
 pub struct Drawing {
     names: Vec<String>,
-    shapes: Vec<ShapeDesc>,
+    shapes: Vec<Vec<PlacedShape>>,
     planes: Vec<(String, Vector3<f64>, Vector3<f64>)>,
     joints: Vec<Link>,
 }
@@ -137,7 +142,7 @@ impl Drawing {
         let end = |name: &str| (name != WORLD).then(|| index.get(name).copied()).flatten();
         Drawing {
             names: scene.bodies.iter().map(|b| b.name.clone()).collect(),
-            shapes: scene.bodies.iter().map(|b| b.shape()).collect(),
+            shapes: scene.bodies.iter().map(|b| b.shapes()).collect(),
             planes: scene
                 .planes
                 .iter()
@@ -182,46 +187,51 @@ impl Drawing {
     pub fn scene_update(&self, t: f64, poses: &[Pose], arrows: &[Arrow]) -> Value {
         let stamp = time(t);
         let mut entities = Vec::with_capacity(poses.len() + self.planes.len() + 2);
-        for (b, (p, shape)) in poses.iter().zip(&self.shapes).enumerate() {
-            let (x, q) = (&p.position, &p.orientation);
+        for (b, (p, shapes)) in poses.iter().zip(&self.shapes).enumerate() {
             let c = color(b, 1.0);
-            let ball = |at: &Vector3<f64>, r: f64, c: &Value| json!({ "pose": pose(at, q), "size": vec3(&Vector3::repeat(2.0 * r)), "color": c });
-            // The marker just inside the surface on the body's x axis.
-            let (reach, size) = match *shape {
-                ShapeDesc::Sphere { radius } => (0.75 * radius, 0.35 * radius),
-                ShapeDesc::Capsule { radius, .. } => (0.75 * radius, 0.35 * radius),
-                ShapeDesc::Box { half_extents: h } => {
-                    let small = h[0].min(h[1]).min(h[2]);
-                    (h[0], 0.7 * small)
-                }
-            };
-            let marker = x + q * Vector3::new(reach, 0.0, 0.0);
-            let mut spheres = vec![ball(&marker, 0.5 * size, &grey(0.1, 1.0))];
-            let mut parts = Vec::new();
-            match *shape {
-                ShapeDesc::Sphere { radius } => spheres.insert(0, ball(x, radius, &c)),
-                ShapeDesc::Capsule {
-                    radius,
-                    half_length,
-                } => {
-                    let axis = q * Vector3::new(0.0, 0.0, half_length);
-                    spheres.insert(0, ball(&(x - axis), radius, &c));
-                    spheres.insert(1, ball(&(x + axis), radius, &c));
-                    // Foxglove's cylinder runs along its pose's z.
-                    parts.push((
-                        "cylinders",
-                        json!([{ "pose": pose(x, q),
+            let (mut spheres, mut cylinders, mut cubes) = (Vec::new(), Vec::new(), Vec::new());
+            for placed in shapes {
+                let q = &(p.orientation * quaternion(&placed.orientation));
+                let x = &(p.position + p.orientation * Vector3::from(placed.position));
+                let ball = |at: &Vector3<f64>, r: f64, c: &Value| json!({ "pose": pose(at, q), "size": vec3(&Vector3::repeat(2.0 * r)), "color": c });
+                match placed.shape {
+                    ShapeDesc::Sphere { radius } => spheres.push(ball(x, radius, &c)),
+                    ShapeDesc::Capsule {
+                        radius,
+                        half_length,
+                    } => {
+                        let axis = q * Vector3::new(0.0, 0.0, half_length);
+                        spheres.push(ball(&(x - axis), radius, &c));
+                        spheres.push(ball(&(x + axis), radius, &c));
+                        // Foxglove's cylinder runs along its pose's z.
+                        cylinders.push(json!({ "pose": pose(x, q),
                                  "size": vec3(&Vector3::new(2.0 * radius, 2.0 * radius, 2.0 * half_length)),
-                                 "bottom_scale": 1.0, "top_scale": 1.0, "color": c }]),
-                    ));
+                                 "bottom_scale": 1.0, "top_scale": 1.0, "color": c }));
+                    }
+                    ShapeDesc::Box { half_extents: h } => cubes.push(json!({ "pose": pose(x, q),
+                             "size": vec3(&(Vector3::from(h) * 2.0)), "color": c })),
                 }
-                ShapeDesc::Box { half_extents: h } => parts.push((
-                    "cubes",
-                    json!([{ "pose": pose(x, q),
-                             "size": vec3(&(Vector3::from(h) * 2.0)), "color": c }]),
-                )),
+                // The marker just inside the surface on the body's x axis,
+                // on a body's one shape at its centre of mass (shapes away
+                // from the centre show the rotation themselves).
+                if shapes.len() == 1 && placed.centred() {
+                    let (reach, size) = match placed.shape {
+                        ShapeDesc::Sphere { radius } => (0.75 * radius, 0.35 * radius),
+                        ShapeDesc::Capsule { radius, .. } => (0.75 * radius, 0.35 * radius),
+                        ShapeDesc::Box { half_extents: h } => {
+                            let small = h[0].min(h[1]).min(h[2]);
+                            (h[0], 0.7 * small)
+                        }
+                    };
+                    let marker = x + q * Vector3::new(reach, 0.0, 0.0);
+                    spheres.push(ball(&marker, 0.5 * size, &grey(0.1, 1.0)));
+                }
             }
-            parts.push(("spheres", Value::Array(spheres)));
+            let parts = [
+                ("cylinders", Value::Array(cylinders)),
+                ("cubes", Value::Array(cubes)),
+                ("spheres", Value::Array(spheres)),
+            ];
             entities.push(entity(&stamp, &format!("body/{}", self.names[b]), &parts));
         }
         for (name, n, point) in &self.planes {

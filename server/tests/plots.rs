@@ -105,17 +105,13 @@ fn figures_and_animation_decode_follow_the_trajectory_and_repeat() {
     for (k, &i) in shown.iter().enumerate() {
         let (pa, pb) = (cam.project(&centre(0, i)), cam.project(&centre(1, i)));
         let gap = ((pa.0 - pb.0).powi(2) + (pa.1 - pb.1).powi(2)).sqrt();
-        let radii: Vec<f64> = model
-            .bodies
-            .iter()
-            .map(|body| body.shape.bounding_radius())
-            .collect();
+        let radii: Vec<f64> = model.bodies.iter().map(|body| body.bound).collect();
         if gap < (radii[0] + radii[1]) * cam.scale + 2.0 {
             continue;
         }
         for (b, &radius) in radii.iter().enumerate() {
             let (cx, cy) = cam.project(&centre(b, i));
-            let shape = &model.bodies[b].shape;
+            let shape = &model.bodies[b].shapes[0].shape;
             let (mx, my) = cam.project(&marker(shape, &run.bodies[b].rows[i]));
             if ((mx - cx).powi(2) + (my - cy).powi(2)).sqrt() < 0.3 * radius * cam.scale {
                 continue;

@@ -34,6 +34,6 @@ pub const IMPULSES_HEADER: &str = "step,t,kind,name,body_a,body_b,px,py,pz";
 
 pub use scene::{
     contact_label, BodyDesc, CameraDesc, FrictionCone, JointDesc, JointKind, PgsDesc, PgsStop,
-    PlaneDesc, PositionUpdate, Scene, SceneError, ShapeDesc, SimDesc, SleepDesc, SolverChoice,
-    DEFAULT_PGS_MAX_ITERATIONS, DEFAULT_PGS_TOLERANCE, MAX_FEATURES,
+    PlacedShape, PlaneDesc, PositionUpdate, Scene, SceneError, ShapeDesc, ShapeEntry, SimDesc,
+    SleepDesc, SolverChoice, DEFAULT_PGS_MAX_ITERATIONS, DEFAULT_PGS_TOLERANCE, MAX_FEATURES,
 };

@@ -166,8 +166,8 @@ fn the_random_scene_generator_is_seeded_and_makes_hard_cases() {
         for b in &model.bodies {
             use cosim_server::engine::model::Shape;
             bodies += 1;
-            boxes += usize::from(matches!(b.shape, Shape::Box { .. }));
-            capsules += usize::from(matches!(b.shape, Shape::Capsule { .. }));
+            boxes += usize::from(matches!(b.shapes[0].shape, Shape::Box { .. }));
+            capsules += usize::from(matches!(b.shapes[0].shape, Shape::Capsule { .. }));
         }
         joints += usize::from(!model.joints.is_empty());
         for j in &model.joints {

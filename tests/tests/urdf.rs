@@ -37,12 +37,12 @@ fn the_urdf_arm_is_the_scene_it_describes() {
     assert!((at(1) - Vector3::new(0.25, 0.0, 0.5)).norm() < 1e-12);
     assert!((at(2) - Vector3::new(0.55, 0.0, 0.5)).norm() < 1e-12);
     assert_eq!(
-        model.bodies[0].shape,
+        model.bodies[0].shapes[0].shape,
         Shape::Box {
             half: Vector3::repeat(0.05)
         }
     );
-    match model.bodies[1].shape {
+    match model.bodies[1].shapes[0].shape {
         Shape::Capsule {
             radius,
             half_length,

@@ -20,7 +20,7 @@ mod sphere_plane;
 mod sphere_sphere;
 
 use crate::model::state::{self, State};
-use crate::model::{Counterpart, Model, Plane, Shape};
+use crate::model::{Counterpart, Geom, Model, Plane, Shape};
 use nalgebra::Vector3;
 
 pub use box_plane::vertex;
@@ -143,6 +143,38 @@ fn pose(state: &State, i: usize) -> Pose {
     }
 }
 
+/// A shape's pose in the world, its body at `body`.
+fn placed(body: &Pose, g: &Geom) -> Pose {
+    match g.offset {
+        None => *body,
+        Some(o) => Pose {
+            x: body.point(&o.x),
+            q: body.q * o.q,
+        },
+    }
+}
+
+/// The contacts `out[start..]` that a shape pair's file found with the
+/// shapes' centres for the bodies' (`a_at`, `b_at`: the shapes' poses;
+/// `ka`, `kb`: which of A's and B's shapes), turned into the bodies'
+/// contacts: lever arms from the centres of mass, features numbered per
+/// pair of shapes (`Model::shape_feature`).
+fn from_shapes(
+    model: &Model,
+    state: &State,
+    (ka, a_at): (usize, &Pose),
+    (kb, b_at): (usize, Option<&Pose>),
+    out: &mut [Geometry],
+) {
+    for g in out {
+        g.feature = model.shape_feature(ka, kb, g.feature);
+        g.r_a += a_at.x - state.bodies[g.a].x;
+        if let (Some(b_at), Counterpart::Body(b)) = (b_at, g.b) {
+            g.r_b += b_at.x - state.bodies[b].x;
+        }
+    }
+}
+
 /// Body `i`'s contacts with plane `p` whose gap is at most `within` (m).
 pub fn body_plane(
     model: &Model,
@@ -153,30 +185,78 @@ pub fn body_plane(
     out: &mut Vec<Geometry>,
 ) {
     let plane: &Plane = &model.planes[p];
-    let at = pose(state, i);
-    match model.bodies[i].shape {
+    let body = pose(state, i);
+    for (k, g) in model.bodies[i].shapes.iter().enumerate() {
+        let start = out.len();
+        let at = placed(&body, g);
+        shape_plane(g.shape, i, &at, p, plane, within, out);
+        if g.offset.is_some() || k > 0 {
+            from_shapes(model, state, (k, &at), (0, None), &mut out[start..]);
+        }
+    }
+}
+
+/// One shape of body `i`, at `at`, against plane `p`.
+fn shape_plane(
+    shape: Shape,
+    i: usize,
+    at: &Pose,
+    p: usize,
+    plane: &Plane,
+    within: f64,
+    out: &mut Vec<Geometry>,
+) {
+    match shape {
         Shape::Sphere { radius } => {
             let g = sphere_plane(i, at.x, radius, p, plane);
             if g.gap <= within {
                 out.push(g);
             }
         }
-        Shape::Box { half } => box_plane::box_plane(i, &at, &half, p, plane, within, out),
+        Shape::Box { half } => box_plane::box_plane(i, at, &half, p, plane, within, out),
         Shape::Capsule {
             radius,
             half_length,
-        } => capsule_plane::capsule_plane(i, &at, (radius, half_length), p, plane, within, out),
+        } => capsule_plane::capsule_plane(i, at, (radius, half_length), p, plane, within, out),
     }
 }
 
 /// The contacts of bodies `i < j` whose gap is at most `within` (m), in
-/// ascending feature (a pair of spheres' one contact whatever its gap).
+/// ascending feature (a pair of spheres' one contact whatever its gap):
+/// each shape of `i` against each of `j`.
 pub fn body_pair(
     model: &Model,
     state: &State,
     i: usize,
     j: usize,
     within: f64,
+    out: &mut Vec<Geometry>,
+) {
+    let (bi, bj) = (pose(state, i), pose(state, j));
+    let (si, sj) = (&model.bodies[i].shapes, &model.bodies[j].shapes);
+    for (ka, ga) in si.iter().enumerate() {
+        for (kb, gb) in sj.iter().enumerate() {
+            let start = out.len();
+            let (pa, pb) = (placed(&bi, ga), placed(&bj, gb));
+            // Both at their centres of mass: a body's one shape, computed
+            // as it always was.
+            let centred = ga.offset.is_none() && gb.offset.is_none();
+            shape_pair((i, ga.shape, &pa), (j, gb.shape, &pb), within, centred, out);
+            if !centred || ka > 0 || kb > 0 {
+                from_shapes(model, state, (ka, &pa), (kb, Some(&pb)), &mut out[start..]);
+            }
+        }
+    }
+}
+
+/// Shape `si` of body `i` at `pi` against shape `sj` of body `j` at `pj`.
+/// `centred`: both shapes are their bodies' one shape at the centre of
+/// mass, where a pair of spheres is listed whatever its gap.
+fn shape_pair(
+    (i, si, pi): (usize, Shape, &Pose),
+    (j, sj, pj): (usize, Shape, &Pose),
+    within: f64,
+    centred: bool,
     out: &mut Vec<Geometry>,
 ) {
     use Shape::{Box, Capsule, Sphere};
@@ -187,18 +267,22 @@ pub fn body_pair(
         Capsule { .. } => 1,
         Box { .. } => 2,
     };
-    let (si, sj) = (model.bodies[i].shape, model.bodies[j].shape);
     let flip = rank(&si) > rank(&sj);
-    let (a, b) = if flip { (j, i) } else { (i, j) };
-    let (pa, pb) = (pose(state, a), pose(state, b));
-    let (sa, sb) = (model.bodies[a].shape, model.bodies[b].shape);
+    let ((a, sa, pa), (b, sb, pb)) = if flip {
+        ((j, sj, *pj), (i, si, *pi))
+    } else {
+        ((i, si, *pi), (j, sj, *pj))
+    };
     let start = out.len();
     match (sa, sb) {
         // Listed whatever `within` says: the broad phase's test for a pair
         // of spheres is this very gap (`broad.rs`), and repeating it in
         // another order of sums could drop a pair it kept by a rounding.
         (Sphere { radius: ra }, Sphere { radius: rb }) => {
-            out.push(sphere_sphere(a, pa.x, ra, b, pb.x, rb));
+            let g = sphere_sphere(a, pa.x, ra, b, pb.x, rb);
+            if centred || g.gap <= within {
+                out.push(g);
+            }
         }
         (Sphere { radius }, Box { half }) => {
             let g = sphere_box::ball_box(a, pa.x, radius, None, b, &pb, &half, 0);
@@ -284,7 +368,7 @@ pub fn detect(
             reach + listing.margin()
         }
     };
-    let bound = |i: usize| model.bodies[i].shape.bounding_radius();
+    let bound = |i: usize| model.bodies[i].bound;
     // The caller's list of the awake bodies, where it vouches for the
     // sleeping ones (`Listing::Within`): only those bodies' contacts are
     // kept.

@@ -130,10 +130,53 @@ impl Shape {
     }
 }
 
+/// Where a shape sits in its body's frame (whose origin is the centre of
+/// mass).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Offset {
+    pub x: Vector3<f64>,
+    pub q: UnitQuaternion<f64>,
+}
+
+/// One of a body's shapes: at the centre of mass, turned as the body
+/// (`offset: None`, a body's one shape as the scene's own fields give it,
+/// computed as before: the same bits), or at an offset.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Geom {
+    pub shape: Shape,
+    pub offset: Option<Offset>,
+}
+
+impl Geom {
+    /// The radius about the body's centre of mass of a sphere that holds
+    /// the shape.
+    pub fn bounding_radius(&self) -> f64 {
+        self.shape.bounding_radius() + self.offset.map_or(0.0, |o| o.x.norm())
+    }
+
+    /// How far the shape reaches from the body's centre of mass along the
+    /// unit world direction `dir`, the body turned by `q`.
+    pub fn extent(&self, q: &UnitQuaternion<f64>, dir: &Vector3<f64>) -> f64 {
+        match self.offset {
+            None => self.shape.extent(q, dir),
+            Some(o) => (q * o.x).dot(dir) + self.shape.extent(&(q * o.q), dir),
+        }
+    }
+}
+
 #[derive(Debug, Clone)]
 pub struct Body {
     pub name: String,
-    pub shape: Shape,
+    /// Its shapes: one for a scene's sphere, capsule or box; several or
+    /// none for a robot's link (`[[body.shape]]`).
+    pub shapes: Vec<Geom>,
+    /// The radius about the centre of mass of a sphere that holds every
+    /// shape: the broad phase's bound (0 with no shape).
+    pub bound: f64,
+    /// The lever (m) that turns the body's angular speed into its
+    /// surface's speed in the bounds of the broad phase and the pruning
+    /// (`Shape::spin_reach`; the bound for shapes away from the centre).
+    pub spin_reach: f64,
     pub mass: f64,
     pub inv_mass: f64,
     /// Body-frame inertia and its inverse (diagonal: the shapes' axes are
@@ -358,10 +401,15 @@ pub struct Model {
     pub motors: Vec<usize>,
     pub params: Params,
     pub initial: Vec<InitialBody>,
-    /// Contact ids per pair of shapes: 1 in a scene of spheres (a pair
-    /// touches at one point), [`MAX_FEATURES`] where a box or capsule may
-    /// touch at several (`collision/`).
+    /// Contact ids per pair of bodies: per pair of their shapes 1 in a
+    /// scene of spheres (a pair touches at one point), [`MAX_FEATURES`]
+    /// where a box or capsule may touch at several (`collision/`); times
+    /// `shape_slots` squared.
     pub features: usize,
+    /// The most shapes a body has (at least 1): a contact's feature is
+    /// `(shape of A * shape_slots + shape of B) * per pair + its own`
+    /// (`Model::shape_feature`).
+    pub shape_slots: usize,
 }
 
 pub use cosim_shared::MAX_FEATURES;
@@ -385,16 +433,40 @@ impl Model {
             .bodies
             .iter()
             .map(|b| {
-                let shape = Shape::from_desc(b.shape());
-                let inertia = match b.inertia {
-                    Some([xx, yy, zz, xy, xz, yz]) => {
+                let shapes: Vec<Geom> = b
+                    .shapes()
+                    .iter()
+                    .map(|p| Geom {
+                        shape: Shape::from_desc(p.shape),
+                        offset: (!p.centred()).then(|| {
+                            let [w, x, y, z] = p.orientation;
+                            Offset {
+                                x: v3(p.position),
+                                q: UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                                    w, x, y, z,
+                                )),
+                            }
+                        }),
+                    })
+                    .collect();
+                let inertia = match (b.inertia, shapes.first()) {
+                    (Some([xx, yy, zz, xy, xz, yz]), _) => {
                         Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz)
                     }
-                    None => shape.inertia(b.mass),
+                    // Validated: one shape on the centre of mass.
+                    (None, Some(g)) => g.shape.inertia(b.mass),
+                    (None, None) => Matrix3::identity(),
+                };
+                let bound = shapes.iter().map(Geom::bounding_radius).fold(0.0, f64::max);
+                let spin_reach = match shapes.as_slice() {
+                    [g] if g.offset.is_none() => g.shape.spin_reach(),
+                    _ => bound,
                 };
                 Body {
                     name: b.name.clone(),
-                    shape,
+                    shapes,
+                    bound,
+                    spin_reach,
                     mass: b.mass,
                     inv_mass: 1.0 / b.mass,
                     inertia,
@@ -570,7 +642,22 @@ impl Model {
             },
             initial,
             features: scene.contact_features(),
+            shape_slots: scene
+                .bodies
+                .iter()
+                .map(|b| b.shapes().len())
+                .max()
+                .unwrap_or(1)
+                .max(1),
         }
+    }
+
+    /// The feature of a pair of bodies' contact `own` (below the per-pair
+    /// count of its shapes' file) between A's shape `sa` and B's `sb` (0
+    /// for a plane).
+    pub fn shape_feature(&self, sa: usize, sb: usize, own: usize) -> usize {
+        let per_pair = self.features / (self.shape_slots * self.shape_slots);
+        (sa * self.shape_slots + sb) * per_pair + own
     }
 
     /// The canonical index of the potential contact `feature` (below

@@ -253,7 +253,7 @@ pub fn update(
     for &i in awake.bodies() {
         let i = i as usize;
         let b = &state.bodies[i];
-        let reach = model.bodies[i].shape.bounding_radius();
+        let reach = model.bodies[i].bound;
         let angular = match reach > 0.0 {
             true => params.angular.max(linear / reach),
             false => params.angular,

@@ -40,7 +40,7 @@ pub fn surface_speed(model: &Model, i: usize, start: Option<&State>, nu: &[f64])
         let b = &s.bodies[i];
         (linear, spin) = (b.v.norm().max(linear), b.w.norm().max(spin));
     }
-    linear + spin * model.bodies[i].shape.spin_reach()
+    linear + spin * model.bodies[i].spin_reach
 }
 
 /// Marks the contacts that enter the LCP before the first solve: all of

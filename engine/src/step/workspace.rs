@@ -153,7 +153,7 @@ impl Workspace {
         let g = p.gravity.norm();
         let of = |i: usize| {
             let (b, m) = (&state.bodies[i], &model.bodies[i]);
-            p.h * (b.v.norm() + b.w.norm() * m.shape.spin_reach() + 2.0 * p.h * g)
+            p.h * (b.v.norm() + b.w.norm() * m.spin_reach + 2.0 * p.h * g)
         };
         match self.awake.only(state, &mut self.reach_written) {
             Some(awake) => {

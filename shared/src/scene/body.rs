@@ -36,6 +36,47 @@ pub struct BodyDesc {
     /// Constant world-frame force (N) on the centre of mass, besides gravity.
     #[serde(default)]
     pub force: [f64; 3],
+    /// `[[body.shape]]`: the body's shapes, each at its own pose in the
+    /// body's frame, instead of one shape at the centre of mass given by
+    /// the fields above; none at all for a body that touches nothing (a
+    /// frame, a sensor: it needs `inertia`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shape: Vec<ShapeEntry>,
+}
+
+/// `[[body.shape]]`: one of a body's shapes, a sphere (`radius`), capsule
+/// (`radius`, `half_length`) or box (`half_extents`) as a body's single
+/// shape is, at `position` and `orientation` in the body's frame (whose
+/// origin is the centre of mass).
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShapeEntry {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub half_length: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub half_extents: Option<[f64; 3]>,
+    #[serde(default)]
+    pub position: [f64; 3],
+    /// Unit quaternion, scalar first.
+    #[serde(default = "identity_quaternion")]
+    pub orientation: [f64; 4],
+}
+
+/// A shape at its pose in its body's frame (`BodyDesc::shapes`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlacedShape {
+    pub shape: ShapeDesc,
+    pub position: [f64; 3],
+    pub orientation: [f64; 4],
+}
+
+impl PlacedShape {
+    /// Whether it sits on the centre of mass, turned as the body.
+    pub fn centred(&self) -> bool {
+        self.position == [0.0; 3] && self.orientation == identity_quaternion()
+    }
 }
 
 /// The most contacts one pair of shapes has: a box's eight vertices
@@ -70,37 +111,83 @@ pub enum ShapeDesc {
     },
 }
 
-impl BodyDesc {
-    /// The body's shape, or which fields are missing or clash (the message
-    /// of the error `validate` names the body's field with).
+/// The shape the fields `radius`, `half_length` and `half_extents` give, or
+/// which are missing or clash (the field and the message).
+fn shape_of(
+    radius: Option<f64>,
+    half_length: Option<f64>,
+    half_extents: Option<[f64; 3]>,
+) -> Result<ShapeDesc, (&'static str, String)> {
+    match (radius, half_length, half_extents) {
+        (Some(radius), None, None) => Ok(ShapeDesc::Sphere { radius }),
+        (Some(radius), Some(half_length), None) => Ok(ShapeDesc::Capsule {
+            radius,
+            half_length,
+        }),
+        (None, None, Some(half_extents)) => Ok(ShapeDesc::Box { half_extents }),
+        (None, Some(_), None) => Err((
+            "radius",
+            "is missing: a capsule needs radius beside half_length".into(),
+        )),
+        (None, None, None) => Err((
+            "radius",
+            "is missing: give radius (a sphere), radius and half_length (a capsule) \
+             or half_extents (a box)"
+                .into(),
+        )),
+        (_, _, Some(_)) => Err((
+            "half_extents",
+            "with radius or half_length: a shape is a box (half_extents alone), a \
+             sphere (radius) or a capsule (radius and half_length)"
+                .into(),
+        )),
+    }
+}
+
+impl ShapeEntry {
     pub fn shape_or_error(&self) -> Result<ShapeDesc, (&'static str, String)> {
-        match (self.radius, self.half_length, self.half_extents) {
-            (Some(radius), None, None) => Ok(ShapeDesc::Sphere { radius }),
-            (Some(radius), Some(half_length), None) => Ok(ShapeDesc::Capsule {
-                radius,
-                half_length,
-            }),
-            (None, None, Some(half_extents)) => Ok(ShapeDesc::Box { half_extents }),
-            (None, Some(_), None) => Err((
-                "radius",
-                "is missing: a capsule needs radius beside half_length".into(),
-            )),
-            (None, None, None) => Err((
-                "radius",
-                "is missing: give radius (a sphere), radius and half_length (a capsule) \
-                 or half_extents (a box)"
-                    .into(),
-            )),
-            (_, _, Some(_)) => Err((
-                "half_extents",
-                "with radius or half_length: a body has one shape, a box (half_extents \
-                 alone), a sphere (radius) or a capsule (radius and half_length)"
-                    .into(),
-            )),
-        }
+        shape_of(self.radius, self.half_length, self.half_extents)
+    }
+}
+
+impl BodyDesc {
+    /// Whether the body's single shape is given by its own fields.
+    pub(crate) fn has_own_shape(&self) -> bool {
+        self.radius.is_some() || self.half_length.is_some() || self.half_extents.is_some()
     }
 
-    /// The body's shape; a sphere of radius 0 where the description has
+    /// The body's single shape, or which fields are missing or clash (the
+    /// message of the error `validate` names the body's field with). A
+    /// body given by `[[body.shape]]` has none of its own
+    /// ([`BodyDesc::shapes`]).
+    pub fn shape_or_error(&self) -> Result<ShapeDesc, (&'static str, String)> {
+        shape_of(self.radius, self.half_length, self.half_extents)
+    }
+
+    /// Every shape of the body at its pose: its own (at the centre of
+    /// mass) or its `[[body.shape]]` list; shapes `validate` refuses are
+    /// left out.
+    pub fn shapes(&self) -> Vec<PlacedShape> {
+        if self.has_own_shape() || self.shape.is_empty() && self.inertia.is_none() {
+            return vec![PlacedShape {
+                shape: self.shape(),
+                position: [0.0; 3],
+                orientation: identity_quaternion(),
+            }];
+        }
+        self.shape
+            .iter()
+            .filter_map(|e| {
+                e.shape_or_error().ok().map(|shape| PlacedShape {
+                    shape,
+                    position: e.position,
+                    orientation: e.orientation,
+                })
+            })
+            .collect()
+    }
+
+    /// The body's single shape; a sphere of radius 0 where the description has
     /// none (`validate` refuses it first).
     pub fn shape(&self) -> ShapeDesc {
         self.shape_or_error()

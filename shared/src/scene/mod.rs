@@ -115,20 +115,29 @@ impl Scene {
         }
     }
 
-    /// Checks every rule that TOML's types cannot express.
-    /// Contact ids per pair of shapes (the engine's `Model::features`): 1
-    /// in a scene of spheres, which touch at one point, else
-    /// [`MAX_FEATURES`]. A contact's id is `pair * features + feature`.
+    /// Contact ids per pair of bodies (the engine's `Model::features`):
+    /// per pair of their shapes, 1 in a scene of spheres, which touch at
+    /// one point, else [`MAX_FEATURES`]; times the square of the most
+    /// shapes a body has. A contact's id is `pair * features + feature`.
     pub fn contact_features(&self) -> usize {
-        if self
+        let per_pair = if self
             .bodies
             .iter()
-            .all(|b| matches!(b.shape(), ShapeDesc::Sphere { .. }))
+            .flat_map(|b| b.shapes())
+            .all(|p| matches!(p.shape, ShapeDesc::Sphere { .. }))
         {
             1
         } else {
             MAX_FEATURES
-        }
+        };
+        let most = self
+            .bodies
+            .iter()
+            .map(|b| b.shapes().len())
+            .max()
+            .unwrap_or(1)
+            .max(1);
+        per_pair * most * most
     }
 }
 

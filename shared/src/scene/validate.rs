@@ -100,28 +100,32 @@ impl Scene {
         for (i, b) in self.bodies.iter().enumerate() {
             claim(&b.name, format!("body[{i}].name"))?;
             let f = |k: &str| format!("body {:?}.{k}", b.name);
-            match b.shape_or_error().map_err(|(k, m)| err(f(k), m))? {
-                ShapeDesc::Sphere { radius } => {
-                    positive(radius).map_err(|m| err(f("radius"), m))?;
-                }
-                ShapeDesc::Capsule {
-                    radius,
-                    half_length,
-                } => {
-                    positive(radius).map_err(|m| err(f("radius"), m))?;
-                    positive(half_length).map_err(|m| err(f("half_length"), m))?;
-                }
-                ShapeDesc::Box { half_extents } => {
-                    if half_extents.iter().any(|&h| positive(h).is_err()) {
-                        return Err(err(
-                            f("half_extents"),
-                            format!(
-                                "= {half_extents:?}: each half extent must be a positive \
-                                 finite number"
-                            ),
-                        ));
-                    }
-                }
+            if !b.shape.is_empty() && b.has_own_shape() {
+                return Err(err(
+                    f("shape"),
+                    "with radius, half_length or half_extents: give a body's shape by \
+                     its own fields or its shapes by [[body.shape]], not both"
+                        .into(),
+                ));
+            }
+            if b.has_own_shape() || b.shape.is_empty() && b.inertia.is_none() {
+                check_shape(b.shape_or_error(), &f).map_err(|(k, m)| err(k, m))?;
+            }
+            for (k, e) in b.shape.iter().enumerate() {
+                let g = |key: &str| f(&format!("shape[{k}].{key}"));
+                check_shape(e.shape_or_error(), &g).map_err(|(k, m)| err(k, m))?;
+                finite3(&e.position).map_err(|m| err(g("position"), m))?;
+                unit_quaternion(&e.orientation).map_err(|m| err(g("orientation"), m))?;
+            }
+            let centred = b.shapes().iter().all(|p| p.centred());
+            if b.inertia.is_none() && !(b.shape.is_empty() || b.shape.len() == 1 && centred) {
+                return Err(err(
+                    f("inertia"),
+                    "is missing: a body with no shape, several, or one away from its \
+                     centre of mass needs its inertia [ixx, iyy, izz, ixy, ixz, iyz] \
+                     (about the centre of mass, in the body's frame)"
+                        .into(),
+                ));
             }
             positive(b.mass).map_err(|m| err(f("mass"), m))?;
             if let Some(j) = b.inertia {
@@ -375,4 +379,33 @@ fn unit_quaternion(q: &[f64; 4]) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// A shape's own checks: its fields present and positive. `field` names a
+/// key of the shape's table.
+fn check_shape(
+    shape: Result<ShapeDesc, (&'static str, String)>,
+    field: &dyn Fn(&str) -> String,
+) -> Result<(), (String, String)> {
+    match shape.map_err(|(k, m)| (field(k), m))? {
+        ShapeDesc::Sphere { radius } => positive(radius).map_err(|m| (field("radius"), m)),
+        ShapeDesc::Capsule {
+            radius,
+            half_length,
+        } => {
+            positive(radius).map_err(|m| (field("radius"), m))?;
+            positive(half_length).map_err(|m| (field("half_length"), m))
+        }
+        ShapeDesc::Box { half_extents } => {
+            if half_extents.iter().any(|&h| positive(h).is_err()) {
+                return Err((
+                    field("half_extents"),
+                    format!(
+                        "= {half_extents:?}: each half extent must be a positive finite number"
+                    ),
+                ));
+            }
+            Ok(())
+        }
+    }
 }
