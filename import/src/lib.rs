@@ -3,4 +3,5 @@
 //! Pure: no IPC, no plotting, no engine; files are read and nothing is
 //! written. URDF now.
 
+pub mod problems;
 pub mod urdf;

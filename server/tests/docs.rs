@@ -97,3 +97,16 @@ fn the_docs_benchmarks_and_solvers_run_at_their_smallest() {
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
+
+/// The scene file of docs/scenes.md, as printed, is a scene: every key it
+/// shows is one the reader takes, every value a valid one.
+#[test]
+fn the_scene_file_in_the_docs_reads() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let text = std::fs::read_to_string(root.join("docs/scenes.md")).expect("docs/scenes.md");
+    let start = text.find("```toml\n").expect("a toml block") + "```toml\n".len();
+    let block = &text[start..start + text[start..].find("```").expect("its end")];
+    let scene =
+        cosim_shared::Scene::parse(block, "docs/scenes.md").unwrap_or_else(|e| panic!("{e}"));
+    assert!(scene.bodies.iter().any(|b| b.shape.len() == 2), "the table");
+}

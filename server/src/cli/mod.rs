@@ -317,10 +317,25 @@ pub struct PlotArgs {
     pub mcap: bool,
 }
 
+/// What a robot file (URDF) does not say: its base and a floor.
+#[derive(clap::Args, Debug, Clone, Copy, Default)]
+pub struct RobotArgs {
+    /// A URDF's root link with mass is welded to the world (a fixed-base
+    /// arm); by default it floats, as in PyBullet and Drake.
+    #[arg(long)]
+    pub fixed_base: bool,
+    /// Add a floor plane at z = 0 under a URDF robot (none by default).
+    #[arg(long)]
+    pub floor: bool,
+}
+
 #[derive(clap::Args, Debug, Clone)]
 pub struct RunArgs {
-    /// Scene file (TOML); the built-in reference scene when omitted.
+    /// Scene file (TOML) or robot (URDF); the built-in reference scene
+    /// when omitted.
     pub scene: Option<PathBuf>,
+    #[command(flatten)]
+    pub robot: RobotArgs,
     /// Step h in seconds (keeps the scene's simulated duration).
     #[arg(long, allow_negative_numbers = true)]
     pub dt: Option<f64>,

@@ -13,9 +13,20 @@ use std::time::Instant;
 /// Loads the scene and applies the command-line overrides, validating both.
 pub fn load(args: &RunArgs) -> Result<Scene, SceneError> {
     let mut scene = match &args.scene {
-        // A URDF robot (`.urdf`) is read as a scene of its own (urdf.rs).
+        // A URDF robot (`.urdf`) is read as a scene of its own
+        // (cosim_import::urdf); what it approximated or merged is said.
         Some(path) if path.extension().is_some_and(|e| e == "urdf") => {
-            cosim_import::urdf::load(path)?
+            let options = cosim_import::urdf::Options {
+                fixed_base: args.robot.fixed_base,
+                floor: args.robot.floor,
+            };
+            let imported = cosim_import::urdf::load(path, options)?;
+            if !args.quiet {
+                for note in &imported.notes {
+                    eprintln!("note: {}: {note}", path.display());
+                }
+            }
+            imported.scene
         }
         Some(path) => Scene::load(path)?,
         None => cosim_shared::scenes::reference()?,

@@ -12,8 +12,11 @@ use std::time::Duration;
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct ServeArgs {
-    /// Scene file (TOML); the built-in reference scene when omitted.
+    /// Scene file (TOML) or robot (URDF); the built-in reference scene
+    /// when omitted.
     pub scene: Option<PathBuf>,
+    #[command(flatten)]
+    pub robot: super::RobotArgs,
     /// Server name: the services live under cosim/NAME/.
     #[arg(long, default_value = "default")]
     pub name: String,
@@ -205,6 +208,7 @@ fn options(args: &ServeArgs) -> Result<(cosim_shared::Scene, ServeOptions), Stri
     }
     let run = RunArgs {
         scene: args.scene.clone(),
+        robot: args.robot,
         dt: args.dt,
         duration: None,
         steps: None,
@@ -358,6 +362,7 @@ pub fn demo(args: &DemoArgs) -> ExitCode {
     };
     let serve_args = ServeArgs {
         scene: None,
+        robot: Default::default(),
         name: name.clone(),
         controllers: 1,
         deadline_ms: 2000.0,

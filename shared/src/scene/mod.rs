@@ -76,12 +76,7 @@ impl Scene {
     /// Reads and validates a scene file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            file: file.clone(),
-            location: None,
-            field: String::new(),
-            message: format!("cannot read the file: {e}"),
-        })?;
+        let text = read_file(path)?;
         let mut scene = Scene::parse(&text, &file)?;
         if scene.sim.name.is_none() {
             scene.sim.name = path.file_stem().map(|s| s.to_string_lossy().into_owned());
@@ -139,6 +134,16 @@ impl Scene {
             .max(1);
         per_pair * most * most
     }
+}
+
+/// A scene's (or robot's) file as text, or the error that names it.
+pub fn read_file(path: &Path) -> Result<String, SceneError> {
+    std::fs::read_to_string(path).map_err(|e| SceneError {
+        file: path.display().to_string(),
+        location: None,
+        field: String::new(),
+        message: format!("cannot read the file: {e}"),
+    })
 }
 
 /// Turns a TOML error into a `SceneError` with the line and column of its span

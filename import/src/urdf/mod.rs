@@ -1,0 +1,577 @@
+//! URDF import: a robot description turned into a scene, written as scene
+//! text and read by `Scene::parse`, so that its checks and their messages
+//! are the scene file's. As MuJoCo's, PyBullet's and Drake's importers read
+//! it (issue 45, point 3):
+//!
+//! - the file is read tolerantly (`read.rs`) and every problem of it is
+//!   said at once, each with its line;
+//! - links joined by fixed joints are one body (MuJoCo's `fusestatic`):
+//!   masses, centres of mass and inertias combined, every link's
+//!   collisions its shapes at their poses; a link with no mass rides on
+//!   its parent that way, and the merged names are said;
+//! - the root is the world when it has no mass (`world`, `base_footprint`,
+//!   PyBullet's mass 0); a root with mass floats free (PyBullet's and
+//!   Drake's default) unless the options fix it to the world; a `floating`
+//!   joint leaves its child free;
+//! - `revolute`, `continuous`, `prismatic` and `spherical` joints, passive
+//!   (MuJoCo and Drake leave a joint no actuator drives free; PyBullet's
+//!   velocity motors are its best-known gotcha): `<limit lower upper>` is
+//!   the range, `effort` and `velocity` bound what drives the joint
+//!   (nothing here yet); `<dynamics friction>` is a joint's dry friction
+//!   (a motor holding rate 0 with at most that effort, MuJoCo's
+//!   `frictionloss`); a joint's two bodies do not collide (MuJoCo's
+//!   parent-child filter);
+//! - no floor unless the options ask for one.
+//!
+//! Not modelled yet, and said when a file has them: `<dynamics damping>`,
+//! `<mimic>` (the joint moves on its own). Cylinders are capsules of the
+//! same radius and overall length (said). Meshes are not read yet
+//! (issue 45, point 2): a problem each, with the file they resolve to.
+
+mod package;
+mod read;
+
+pub use package::resolve;
+pub use read::{Geometry, JointType, Robot};
+
+use crate::problems::Problems;
+use cosim_shared::{Scene, SceneError};
+use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// What the importer adds that the file does not say.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Options {
+    /// Weld a root with mass to the world (a fixed-base arm described
+    /// without a `world` link). Default: it floats.
+    pub fixed_base: bool,
+    /// A floor plane at z = 0. Default: none.
+    pub floor: bool,
+}
+
+/// A scene read from a URDF, and what the reading has to say about it.
+#[derive(Debug, Clone)]
+pub struct Imported {
+    pub scene: Scene,
+    /// What was approximated, merged or left out, one line each.
+    pub notes: Vec<String>,
+}
+
+/// Reads a `.urdf` file as a scene named after the file.
+pub fn load(path: &Path, options: Options) -> Result<Imported, SceneError> {
+    let file = path.display().to_string();
+    let text = cosim_shared::scene::read_file(path)?;
+    let name = path
+        .file_stem()
+        .map_or("robot".into(), |s| s.to_string_lossy().into_owned());
+    import(&text, &file, &name, path.parent(), options)
+}
+
+/// The scene of URDF text `text` (from `file`, whose folder `dir` mesh
+/// paths are relative to), named `name`.
+pub fn import(
+    text: &str,
+    file: &str,
+    name: &str,
+    dir: Option<&Path>,
+    options: Options,
+) -> Result<Imported, SceneError> {
+    let mut problems = Problems::new(file);
+    let robot = read::robot(text, &mut problems);
+    let mut notes = Vec::new();
+    let tree = Tree::new(&robot, &mut problems);
+    let mut s = format!(
+        "[sim]\nname = {name:?}\ndt = 0.001\nduration = 3.0\ngravity = [0.0, 0.0, -9.81]\nfriction_directions = 8\n\n"
+    );
+    if let Some(tree) = &tree {
+        tree.write(&robot, dir, options, &mut s, &mut problems, &mut notes);
+    }
+    problems.check()?;
+    if options.floor {
+        s += "[[plane]]\nname = \"floor\"\nnormal = [0.0, 0.0, 1.0]\npoint = [0.0, 0.0, 0.0]\nfriction = 0.5\n\n";
+    }
+    let scene = Scene::parse(&s, file)?;
+    Ok(Imported { scene, notes })
+}
+
+/// The scene of URDF text with the default options, for tests and tools
+/// that read text (no mesh can be found from it).
+pub fn scene(text: &str, file: &str, name: &str) -> Result<Scene, SceneError> {
+    import(text, file, name, None, Options::default()).map(|i| i.scene)
+}
+
+/// The kinematic tree: each link's world frame at zero and its group (the
+/// links joined to it by fixed joints, named by the topmost).
+struct Tree {
+    /// Per link: its world frame.
+    frame: Vec<Isometry3<f64>>,
+    /// Per link: the index of its group's top link.
+    group: Vec<usize>,
+    root: usize,
+    /// Whether the root link is the world (it has no mass).
+    world_root: bool,
+    /// Per link, the joint whose child it is.
+    parent_joint: Vec<Option<usize>>,
+}
+
+fn v3(v: &Vector3<f64>) -> String {
+    format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z)
+}
+
+fn quat(q: &UnitQuaternion<f64>) -> String {
+    format!("[{:?}, {:?}, {:?}, {:?}]", q.w, q.i, q.j, q.k)
+}
+
+impl Tree {
+    fn new(robot: &read::Robot, problems: &mut Problems) -> Option<Tree> {
+        let n = robot.links.len();
+        if n == 0 {
+            if problems.list.is_empty() {
+                problems.add(0, "<robot>", "has no <link>");
+            }
+            return None;
+        }
+        let index = |name: &str| robot.links.iter().position(|l| l.name == name);
+        for (k, l) in robot.links.iter().enumerate() {
+            if let Some(first) = robot.links[..k].iter().find(|o| o.name == l.name) {
+                problems.add(
+                    l.line,
+                    format!("link {:?}", l.name),
+                    format!(
+                        "a second link of this name (the first on line {})",
+                        first.line
+                    ),
+                );
+            }
+        }
+        let mut parent_joint: Vec<Option<usize>> = vec![None; n];
+        for (k, j) in robot.joints.iter().enumerate() {
+            let what = format!("joint {:?}", j.name);
+            let (p, c) = (index(&j.parent), index(&j.child));
+            for (tag, name, found) in [("parent", &j.parent, p), ("child", &j.child, c)] {
+                if found.is_none() {
+                    problems.add(
+                        j.line,
+                        what.as_str(),
+                        format!("<{tag} link={name:?}>: no such link"),
+                    );
+                }
+            }
+            if let Some(c) = c {
+                match parent_joint[c] {
+                    Some(other) => problems.add(
+                        j.line,
+                        what.as_str(),
+                        format!(
+                            "link {:?} is the child of joint {:?} too: a URDF is a tree",
+                            j.child, robot.joints[other].name
+                        ),
+                    ),
+                    None => parent_joint[c] = Some(k),
+                }
+            }
+        }
+        let roots: Vec<usize> = (0..n).filter(|&l| parent_joint[l].is_none()).collect();
+        let [root] = roots[..] else {
+            let names: Vec<&str> = roots
+                .iter()
+                .map(|&l| robot.links[l].name.as_str())
+                .collect();
+            problems.add(
+                0,
+                "<robot>",
+                format!(
+                    "has {} root links {names:?} (links no joint has as child): a URDF is one tree",
+                    roots.len()
+                ),
+            );
+            return None;
+        };
+        // The root is the world when it has no mass (`world`,
+        // `base_footprint`; PyBullet's static base of mass 0).
+        let world_root = robot.links[root]
+            .inertial
+            .as_ref()
+            .is_none_or(|i| i.mass <= 0.0);
+        // World frames and groups, from the root down.
+        let mut frame = vec![None; n];
+        let mut group = vec![usize::MAX; n];
+        frame[root] = Some(Isometry3::identity());
+        group[root] = root;
+        let mut order = vec![root];
+        let mut k = 0;
+        while k < order.len() {
+            let l = order[k];
+            k += 1;
+            for j in robot.joints.iter().filter(|j| index(&j.parent) == Some(l)) {
+                let Some(c) = index(&j.child) else { continue };
+                if frame[c].is_some() {
+                    continue;
+                }
+                frame[c] = frame[l].map(|t| t * j.origin);
+                // A fixed joint merges its child into its parent's body,
+                // but for the world's: each link fixed to the world is a
+                // body welded to it.
+                let merge = j.kind == JointType::Fixed && !(world_root && l == root);
+                group[c] = if merge { group[l] } else { c };
+                order.push(c);
+            }
+        }
+        // Whether a link's way up meets a joint whose parent is missing
+        // (said already).
+        let orphan = |mut l: usize| {
+            for _ in 0..n {
+                let Some(j) = parent_joint[l] else {
+                    return false;
+                };
+                match index(&robot.joints[j].parent) {
+                    Some(p) => l = p,
+                    None => return true,
+                }
+            }
+            false
+        };
+        for (l, f) in frame.iter().enumerate() {
+            if f.is_none() {
+                // A body of its own, so that its other problems are found.
+                group[l] = l;
+                if orphan(l) {
+                    continue;
+                }
+                problems.add(
+                    robot.links[l].line,
+                    format!("link {:?}", robot.links[l].name),
+                    "is not reached from the root: its joints form a loop",
+                );
+            }
+        }
+        let frame: Vec<Isometry3<f64>> = frame.into_iter().map(Option::unwrap_or_default).collect();
+        Some(Tree {
+            frame,
+            group,
+            root,
+            world_root,
+            parent_joint,
+        })
+    }
+
+    /// The links of group `g` (top link first).
+    fn members(&self, g: usize) -> impl Iterator<Item = usize> + '_ {
+        (0..self.group.len()).filter(move |&l| self.group[l] == g)
+    }
+
+    /// The groups: their top links, in file order.
+    fn groups(&self) -> Vec<usize> {
+        (0..self.group.len())
+            .filter(|&l| self.group[l] == l)
+            .collect()
+    }
+
+    /// Whether group `g` is held by the world: the world root's, or fixed
+    /// to it by a joint of its own.
+    fn held(&self, robot: &read::Robot, g: usize) -> bool {
+        self.world_root
+            && (g == self.root
+                || self.parent_joint[g].is_some_and(|j| robot.joints[j].kind == JointType::Fixed))
+    }
+
+    /// Writes the bodies and joints.
+    fn write(
+        &self,
+        robot: &read::Robot,
+        dir: Option<&Path>,
+        options: Options,
+        s: &mut String,
+        problems: &mut Problems,
+        notes: &mut Vec<String>,
+    ) {
+        let links = &robot.links;
+        // Per group: the body it is, or `world`.
+        let mut body_name = vec![String::new(); links.len()];
+        for g in self.groups() {
+            let what = format!("link {:?}", links[g].name);
+            let merged: Vec<&str> = self
+                .members(g)
+                .skip(1)
+                .map(|l| links[l].name.as_str())
+                .collect();
+            if !merged.is_empty() {
+                notes.push(format!(
+                    "links {merged:?} are fixed to link {:?}: one body with it",
+                    links[g].name
+                ));
+            }
+            let shapes: Vec<(usize, &read::Collision)> = self
+                .members(g)
+                .flat_map(|l| links[l].collisions.iter().map(move |c| (l, c)))
+                .collect();
+            let held = self.held(robot, g);
+            let mass = Mass::of(self, links, g);
+            if held && shapes.is_empty() && mass.is_none() {
+                body_name[g] = "world".into();
+                continue;
+            }
+            let name = links[g].name.clone();
+            body_name[g] = name.clone();
+            let (mass, at, inertia) = match mass {
+                Some(b) => (b.mass, b.frame, b.inertia),
+                None if held => {
+                    notes.push(format!(
+                        "link {:?} is fixed to the world and has shapes but no mass: a body of 1 kg welded to the world",
+                        links[g].name
+                    ));
+                    (1.0, self.frame[g], Matrix3::identity() * 1e-2)
+                }
+                // Its mass could not be read: said already.
+                None if self
+                    .members(g)
+                    .any(|l| links[l].inertial.as_ref().is_some_and(|i| i.mass.is_nan())) =>
+                {
+                    continue
+                }
+                None => {
+                    let names: Vec<&str> =
+                        self.members(g).map(|l| links[l].name.as_str()).collect();
+                    problems.add(
+                        links[g].line,
+                        what,
+                        format!(
+                            "moves on a joint but has no mass (with the links fixed to it: {names:?}): \
+                             give it an <inertial> with a positive mass and inertia"
+                        ),
+                    );
+                    continue;
+                }
+            };
+            let _ = write!(
+                s,
+                "[[body]]\nname = {name:?}\nmass = {mass:?}\ninertia = [{:?}, {:?}, {:?}, {:?}, {:?}, {:?}]\nposition = {}\norientation = {}\nfriction = 0.5\n",
+                inertia[(0, 0)],
+                inertia[(1, 1)],
+                inertia[(2, 2)],
+                inertia[(0, 1)],
+                inertia[(0, 2)],
+                inertia[(1, 2)],
+                v3(&at.translation.vector),
+                quat(&at.rotation),
+            );
+            for (l, c) in shapes {
+                if let Some(shape) = shape_text(c, &links[l].name, dir, problems, notes) {
+                    let pose = at.inverse() * self.frame[l] * c.origin;
+                    let _ = write!(
+                        s,
+                        "[[body.shape]]\n{shape}position = {}\norientation = {}\n",
+                        v3(&pose.translation.vector),
+                        quat(&pose.rotation)
+                    );
+                }
+            }
+            s.push('\n');
+            // The root held by the world, or fixed by the options.
+            if g == self.root && (held || options.fixed_base) {
+                let _ = write!(
+                    s,
+                    "[[joint]]\nname = \"{name}_to_world\"\ntype = \"fixed\"\nbody_a = \"world\"\nbody_b = {name:?}\nanchor = {}\n\n",
+                    v3(&at.translation.vector)
+                );
+            }
+        }
+        let body_of = |link: &str| -> Option<&str> {
+            let l = links.iter().position(|k| k.name == link)?;
+            let name = &body_name[self.group[l]];
+            (!name.is_empty()).then_some(name.as_str())
+        };
+        for j in &robot.joints {
+            let what = format!("joint {:?}", j.name);
+            let Some(c) = links.iter().position(|k| k.name == j.child) else {
+                continue;
+            };
+            let kind = match j.kind {
+                JointType::Revolute | JointType::Continuous => "revolute",
+                JointType::Prismatic => "prismatic",
+                JointType::Spherical => "spherical",
+                // A fixed joint whose child was not merged: to the world.
+                JointType::Fixed if self.group[c] == c => "fixed",
+                JointType::Fixed | JointType::Floating => continue,
+                JointType::Planar => {
+                    problems.add(
+                        j.line,
+                        what,
+                        "type=\"planar\": not modelled (no joint of two free directions)",
+                    );
+                    continue;
+                }
+            };
+            let (Some(a), Some(b)) = (body_of(&j.parent), body_of(&j.child)) else {
+                continue;
+            };
+            if a == b {
+                continue;
+            }
+            let Some(p) = links.iter().position(|k| k.name == j.parent) else {
+                continue;
+            };
+            let at = self.frame[p] * j.origin;
+            let _ = write!(
+                s,
+                "[[joint]]\nname = {:?}\ntype = \"{kind}\"\nbody_a = {a:?}\nbody_b = {b:?}\nanchor = {}\ncollide = false\n",
+                j.name,
+                v3(&at.translation.vector)
+            );
+            if matches!(kind, "revolute" | "prismatic") {
+                if j.axis.norm() <= 1e-12 {
+                    problems.add(
+                        j.line,
+                        what,
+                        "<axis xyz=\"0 0 0\">: a hinge or slider needs an axis",
+                    );
+                    continue;
+                }
+                let _ = writeln!(s, "axis = {}", v3(&(at.rotation * j.axis.normalize())));
+            }
+            if let (JointType::Revolute | JointType::Prismatic, Some(lo), Some(hi)) =
+                (j.kind, j.lower, j.upper)
+            {
+                // PyBullet's rule: lower > upper is no limit; so is a
+                // hinge's range of a full turn or more.
+                let full = j.kind == JointType::Revolute && hi - lo >= 2.0 * std::f64::consts::PI;
+                if lo < hi && !full {
+                    let _ = writeln!(s, "range = [{lo:?}, {hi:?}]");
+                }
+            }
+            if j.friction > 0.0 && matches!(kind, "revolute" | "prismatic") {
+                let _ = writeln!(
+                    s,
+                    "motor = {{ speed = 0.0, max_effort = {:?} }}",
+                    j.friction
+                );
+            }
+            if j.damping > 0.0 {
+                notes.push(format!(
+                    "joint {:?}: <dynamics damping=\"{}\"> is not modelled yet",
+                    j.name, j.damping
+                ));
+            }
+            if let Some((m, _, _)) = &j.mimic {
+                notes.push(format!(
+                    "joint {:?}: <mimic joint={m:?}> is not modelled yet: it moves on its own",
+                    j.name
+                ));
+            }
+            s.push('\n');
+        }
+    }
+}
+
+/// A collision's shape as scene keys, or `None` (with a problem) for what
+/// is not read.
+fn shape_text(
+    c: &read::Collision,
+    link: &str,
+    dir: Option<&Path>,
+    problems: &mut Problems,
+    notes: &mut Vec<String>,
+) -> Option<String> {
+    Some(match &c.geometry {
+        Geometry::Sphere(r) => format!("radius = {r:?}\n"),
+        Geometry::Box(size) => format!(
+            "half_extents = [{:?}, {:?}, {:?}]\n",
+            size[0] / 2.0,
+            size[1] / 2.0,
+            size[2] / 2.0
+        ),
+        Geometry::Capsule { radius, length } => {
+            format!("radius = {radius:?}\nhalf_length = {:?}\n", length / 2.0)
+        }
+        Geometry::Cylinder { radius, length } => {
+            let half = length / 2.0 - radius;
+            notes.push(format!(
+                "link {link:?}: a cylinder is a capsule here (same radius and overall length)"
+            ));
+            if half > 0.0 {
+                format!("radius = {radius:?}\nhalf_length = {half:?}\n")
+            } else {
+                format!("radius = {:?}\n", radius.max(length / 2.0))
+            }
+        }
+        Geometry::Mesh { filename, .. } => {
+            let found = match package::resolve(filename, dir) {
+                Ok(p) => format!("found at {}", p.display()),
+                Err(e) => e,
+            };
+            problems.add(
+                c.line,
+                format!("link {link:?} <collision>"),
+                format!("the mesh {filename:?} ({found}): meshes are not read yet"),
+            );
+            return None;
+        }
+    })
+}
+
+/// A group's mass properties: total mass, the body frame (at the centre of
+/// mass, turned as the top link's inertial frame) and the inertia about it
+/// in that frame.
+struct Mass {
+    mass: f64,
+    frame: Isometry3<f64>,
+    inertia: Matrix3<f64>,
+}
+
+impl Mass {
+    /// `None` when the group has no mass.
+    fn of(tree: &Tree, links: &[read::Link], g: usize) -> Option<Mass> {
+        let parts: Vec<(f64, Isometry3<f64>, Matrix3<f64>)> = tree
+            .members(g)
+            .filter_map(|l| {
+                let i = links[l].inertial.as_ref()?;
+                let [xx, yy, zz, xy, xz, yz] = i.inertia;
+                (i.mass > 0.0).then(|| {
+                    (
+                        i.mass,
+                        tree.frame[l] * i.origin,
+                        Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz),
+                    )
+                })
+            })
+            .collect();
+        let mass: f64 = parts.iter().map(|p| p.0).sum();
+        if mass <= 0.0 {
+            return None;
+        }
+        // One part: its inertial frame as it is (the same numbers).
+        if let [(m, at, inertia)] = parts[..] {
+            return Some(Mass {
+                mass: m,
+                frame: at,
+                inertia,
+            });
+        }
+        let c = parts
+            .iter()
+            .map(|(m, at, _)| at.translation.vector * *m)
+            .sum::<Vector3<f64>>()
+            / mass;
+        let turn = links[g]
+            .inertial
+            .as_ref()
+            .map_or(tree.frame[g].rotation, |i| {
+                tree.frame[g].rotation * i.origin.rotation
+            });
+        let frame = Isometry3::from_parts(c.into(), turn);
+        let mut inertia = Matrix3::zeros();
+        for (m, at, i) in &parts {
+            // Into the body's axes, then moved to its centre of mass.
+            let r = (turn.inverse() * at.rotation).to_rotation_matrix();
+            let d = turn.inverse_transform_vector(&(at.translation.vector - c));
+            inertia += r.matrix() * i * r.matrix().transpose()
+                + (Matrix3::identity() * d.norm_squared() - d * d.transpose()) * *m;
+        }
+        Some(Mass {
+            mass,
+            frame,
+            inertia,
+        })
+    }
+}
