@@ -426,6 +426,28 @@ fn draw_frame<DB: DrawingBackend>(
                 area.draw(&Polygon::new(inner, base.filled())).map_err(e)?;
                 draw_ball(area, cam, &ends[1 - far], radius, base).map_err(e)?;
             }
+            Shape::Hull { index, .. } => {
+                // As a box's: the faces turned towards the camera.
+                let h = &model.hulls[index];
+                for face in &h.faces {
+                    let facing = q.transform_vector(&face.normal).dot(&-cam.forward);
+                    if facing <= 1e-9 {
+                        continue;
+                    }
+                    let outline: Vec<(i32, i32)> = face
+                        .verts
+                        .iter()
+                        .map(|&k| pix(&(c + q.transform_vector(&h.vertices[k]))))
+                        .collect();
+                    let fill = shade(base, 0.6 + 0.4 * facing);
+                    area.draw(&Polygon::new(outline.clone(), fill.filled()))
+                        .map_err(e)?;
+                    let mut edge = outline;
+                    edge.push(edge[0]);
+                    area.draw(&PathElement::new(edge, shade(base, 0.45).stroke_width(1)))
+                        .map_err(e)?;
+                }
+            }
             Shape::Box { half } => {
                 // The faces turned towards the camera (a convex body's do
                 // not overlap), each shaded by how squarely it faces it.

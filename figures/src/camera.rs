@@ -144,6 +144,7 @@ pub fn marker(shape: &Shape, r: &[f64; 13]) -> Vector3<f64> {
     let reach = match *shape {
         Shape::Sphere { radius } | Shape::Capsule { radius, .. } => 0.8 * radius,
         Shape::Box { half } => half.x,
+        Shape::Hull { bound, .. } => 0.5 * bound,
     };
     Vector3::new(r[0], r[1], r[2]) + q.transform_vector(&Vector3::x()) * reach
 }
@@ -155,6 +156,7 @@ pub(crate) fn screen_radius(shape: &Shape, cam: &Camera) -> i32 {
     let r = match *shape {
         Shape::Sphere { radius } | Shape::Capsule { radius, .. } => radius,
         Shape::Box { half } => half.min(),
+        Shape::Hull { bound, .. } => 0.5 * bound,
     };
     (r * cam.scale).round().max(2.0) as i32
 }

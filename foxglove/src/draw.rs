@@ -61,6 +61,22 @@ fn vec3(v: &Vector3<f64>) -> Value {
     json!({ "x": v.x, "y": v.y, "z": v.z })
 }
 
+/// A hull's faces as triangles (fans), three points each, in the shape's
+/// frame; none for the other shapes.
+fn hull_triangles(shape: &ShapeDesc) -> Vec<[f64; 3]> {
+    let ShapeDesc::Hull { points } = shape else {
+        return Vec::new();
+    };
+    let Ok(h) = cosim_shared::scene::hull::convex_hull(points) else {
+        return Vec::new();
+    };
+    h.faces
+        .iter()
+        .flat_map(|f| (1..f.len().saturating_sub(1)).flat_map(move |k| [f[0], f[k], f[k + 1]]))
+        .map(|k| h.vertices[k])
+        .collect()
+}
+
 /// A scene's quaternion `[w, x, y, z]`, normalised.
 fn quaternion(q: &[f64; 4]) -> UnitQuaternion<f64> {
     UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
@@ -116,7 +132,9 @@ fn entity(stamp: &Value, id: &str, parts: &[(&str, Value)]) -> Value {
 #[derive(Debug, Clone)]
 pub struct Drawing {
     names: Vec<String>,
-    shapes: Vec<Vec<PlacedShape>>,
+    /// Per body its shapes, each with its hull's triangles (three points
+    /// each, shape frame) where it is a hull.
+    shapes: Vec<Vec<(PlacedShape, Vec<[f64; 3]>)>>,
     planes: Vec<(String, Vector3<f64>, Vector3<f64>)>,
     joints: Vec<Link>,
 }
@@ -142,7 +160,19 @@ impl Drawing {
         let end = |name: &str| (name != WORLD).then(|| index.get(name).copied()).flatten();
         Drawing {
             names: scene.bodies.iter().map(|b| b.name.clone()).collect(),
-            shapes: scene.bodies.iter().map(|b| b.shapes()).collect(),
+            shapes: scene
+                .bodies
+                .iter()
+                .map(|b| {
+                    b.shapes()
+                        .into_iter()
+                        .map(|p| {
+                            let triangles = hull_triangles(&p.shape);
+                            (p, triangles)
+                        })
+                        .collect()
+                })
+                .collect(),
             planes: scene
                 .planes
                 .iter()
@@ -189,8 +219,9 @@ impl Drawing {
         let mut entities = Vec::with_capacity(poses.len() + self.planes.len() + 2);
         for (b, (p, shapes)) in poses.iter().zip(&self.shapes).enumerate() {
             let c = color(b, 1.0);
-            let (mut spheres, mut cylinders, mut cubes) = (Vec::new(), Vec::new(), Vec::new());
-            for placed in shapes {
+            let (mut spheres, mut cylinders, mut cubes, mut triangles) =
+                (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+            for (placed, hull) in shapes {
                 let q = &(p.orientation * quaternion(&placed.orientation));
                 let x = &(p.position + p.orientation * Vector3::from(placed.position));
                 let ball = |at: &Vector3<f64>, r: f64, c: &Value| json!({ "pose": pose(at, q), "size": vec3(&Vector3::repeat(2.0 * r)), "color": c });
@@ -210,11 +241,15 @@ impl Drawing {
                     }
                     ShapeDesc::Box { half_extents: h } => cubes.push(json!({ "pose": pose(x, q),
                              "size": vec3(&(Vector3::from(h) * 2.0)), "color": c })),
+                    ShapeDesc::Hull { .. } => triangles.push(json!({ "pose": pose(x, q),
+                             "points": hull.iter().map(|v| vec3(&Vector3::from(*v))).collect::<Vec<_>>(),
+                             "color": c, "colors": [], "indices": [] })),
                 }
                 // The marker just inside the surface on the body's x axis,
                 // on a body's one shape at its centre of mass (shapes away
                 // from the centre show the rotation themselves).
-                if shapes.len() == 1 && placed.centred() {
+                let hull = matches!(placed.shape, ShapeDesc::Hull { .. });
+                if shapes.len() == 1 && placed.centred() && !hull {
                     let (reach, size) = match placed.shape {
                         ShapeDesc::Sphere { radius } => (0.75 * radius, 0.35 * radius),
                         ShapeDesc::Capsule { radius, .. } => (0.75 * radius, 0.35 * radius),
@@ -222,12 +257,14 @@ impl Drawing {
                             let small = h[0].min(h[1]).min(h[2]);
                             (h[0], 0.7 * small)
                         }
+                        ShapeDesc::Hull { .. } => (0.0, 0.0),
                     };
                     let marker = x + q * Vector3::new(reach, 0.0, 0.0);
                     spheres.push(ball(&marker, 0.5 * size, &grey(0.1, 1.0)));
                 }
             }
             let parts = [
+                ("triangles", Value::Array(triangles)),
                 ("cylinders", Value::Array(cylinders)),
                 ("cubes", Value::Array(cubes)),
                 ("spheres", Value::Array(spheres)),

@@ -3,5 +3,6 @@
 //! Pure: no IPC, no plotting, no engine; files are read and nothing is
 //! written. URDF now.
 
+pub mod mesh;
 pub mod problems;
 pub mod urdf;

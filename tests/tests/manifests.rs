@@ -10,7 +10,10 @@ use std::path::Path;
 /// Each crate and the dependencies it may have (all of them, sorted); the
 /// engine's list is engine/tests/pure.rs's, not repeated here.
 const CRATES: [(&str, &[&str]); 3] = [
-    ("import", &["cosim-shared", "nalgebra", "roxmltree"]),
+    (
+        "import",
+        &["cosim-shared", "mesh-loader", "nalgebra", "roxmltree"],
+    ),
     (
         "figures",
         &[

@@ -222,6 +222,7 @@ fn a_root_with_mass_floats_unless_asked_and_no_floor_is_added() {
     let options = cosim_import::urdf::Options {
         fixed_base: true,
         floor: true,
+        ..Default::default()
     };
     let held = cosim_import::urdf::import(cube, "cube.urdf", "cube", None, options)
         .unwrap_or_else(|e| panic!("{e}"))
@@ -349,4 +350,114 @@ fn joints_dynamics_and_massless_links() {
         notes.contains("joint \"elbow\": <mimic joint=\"shoulder\">"),
         "{notes}"
     );
+}
+
+/// A collision mesh (an STL and an OBJ written here, as robot packages
+/// ship them) is its convex hull, scaled as `<mesh scale>` says, found by
+/// a path relative to the robot file; the floor that `floor` asks for lies
+/// under the robot's lowest point, and a link resting on it stays there.
+#[test]
+fn a_mesh_is_its_convex_hull_and_the_floor_lies_under_the_robot() {
+    let dir = std::env::temp_dir().join(format!("cosim-urdf-mesh-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("meshes")).unwrap();
+    // A unit cube's twelve triangles, and a point at its centre (a
+    // vertex of no face: the hull leaves it out).
+    let c = |k: usize| {
+        let s = |bit: usize| if k & bit != 0 { 0.5 } else { -0.5 };
+        [s(1), s(2), s(4)]
+    };
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let mut stl = String::from("solid cube\n");
+    let mut obj = String::new();
+    for k in 0..8 {
+        let v = c(k);
+        obj += &format!("v {} {} {}\n", v[0], v[1], v[2]);
+    }
+    obj += "v 0 0 0\n";
+    for q in quads {
+        for t in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+            stl += "facet normal 0 0 0\nouter loop\n";
+            for k in t {
+                let v = c(k);
+                stl += &format!("vertex {} {} {}\n", v[0], v[1], v[2]);
+            }
+            stl += "endloop\nendfacet\n";
+            obj += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+        }
+    }
+    stl += "endsolid cube\n";
+    std::fs::write(dir.join("meshes/cube.stl"), stl).unwrap();
+    std::fs::write(dir.join("meshes/cube.obj"), obj).unwrap();
+    for mesh in ["cube.stl", "cube.obj"] {
+        let urdf = format!(
+            r#"<robot name="r"><link name="block">
+              <inertial><mass value="1"/><inertia ixx="0.0067" iyy="0.0167" izz="0.0167"/></inertial>
+              <collision><origin xyz="0 0 1" rpy="0 0 0.3"/>
+                <geometry><mesh filename="meshes/{mesh}" scale="0.2 0.1 0.1"/></geometry></collision>
+            </link></robot>"#
+        );
+        let path = dir.join("r.urdf");
+        std::fs::write(&path, urdf).unwrap();
+        let options = cosim_import::urdf::Options {
+            floor: true,
+            ..Default::default()
+        };
+        let imported =
+            cosim_import::urdf::load(&path, options).unwrap_or_else(|e| panic!("{mesh}: {e}"));
+        let scene = imported.scene;
+        let shape = &scene.bodies[0].shape[0];
+        let hull = shape.hull.as_ref().expect("a hull");
+        assert_eq!(hull.len(), 8, "{mesh}: {hull:?}");
+        for v in hull {
+            assert!(
+                (v[0].abs() - 0.1).abs() < 1e-7 && (v[1].abs() - 0.05).abs() < 1e-7,
+                "{v:?}"
+            );
+        }
+        // The floor under the block's bottom face: z = 1 - 0.05.
+        let floor = scene.planes[0].point[2];
+        assert!((floor - 0.95).abs() < 1e-7, "{mesh}: {floor}");
+        let mut e = Engine::new(Model::from_scene(&scene));
+        for _ in 0..500 {
+            assert!(e.step().ok());
+        }
+        let b = e.state().bodies[0];
+        assert!((b.x.z - 0.0).abs() < 1e-4, "{mesh}: {}", b.x);
+        assert!(b.v.norm() < 1e-6, "{mesh}: {}", b.v);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A robot's links do not touch each other unless asked (PyBullet's
+/// default); asked, two overlapping links that no joint joins do.
+#[test]
+fn a_robots_links_touch_each_other_only_when_asked() {
+    let text = r#"<robot name="r">
+      <link name="a"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01"/></inertial>
+        <collision><geometry><sphere radius="0.1"/></geometry></collision></link>
+      <link name="b"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01"/></inertial></link>
+      <link name="c"><inertial><origin xyz="0.15 0 0"/><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01"/></inertial>
+        <collision><origin xyz="0.15 0 0"/><geometry><sphere radius="0.1"/></geometry></collision></link>
+      <joint name="ab" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint>
+      <joint name="bc" type="revolute"><parent link="b"/><child link="c"/><axis xyz="0 0 1"/></joint>
+    </robot>"#;
+    for (self_collision, touching) in [(false, false), (true, true)] {
+        let options = cosim_import::urdf::Options {
+            self_collision,
+            ..Default::default()
+        };
+        let scene = cosim_import::urdf::import(text, "r.urdf", "r", None, options)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .scene;
+        let model = Model::from_scene(&scene);
+        let (a, c) = (0, 2);
+        assert_eq!(model.may_touch(a, c), touching);
+    }
 }

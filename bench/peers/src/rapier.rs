@@ -75,6 +75,8 @@ pub(crate) fn build(scene: &Scene, sleep: bool) -> World {
                 half_length,
             } => ColliderBuilder::capsule_z(half_length, radius),
             ShapeDesc::Box { half_extents: h } => ColliderBuilder::cuboid(h[0], h[1], h[2]),
+            // A body's own fields give no hull (only `[[body.shape]]`).
+            ShapeDesc::Hull { .. } => unreachable!("a body's own shape is never a hull"),
         }
         .mass(b.mass)
         .friction(b.friction)

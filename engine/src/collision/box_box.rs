@@ -1,3 +1,4 @@
+use super::manifold::{push_face_contacts, Polygon, Reference};
 use super::segment::{nearest_between_segments, Pose};
 use super::Geometry;
 use crate::model::Counterpart;
@@ -116,7 +117,7 @@ pub fn box_box(
     let fc = i_pose.x + i_axes[k] * (s * i_h[k]);
     let (u, v) = ((k + 1) % 3, (k + 2) % 3);
     let (du, dv) = (i_axes[u] * i_h[u], i_axes[v] * i_h[v]);
-    let mut poly = Polygon::default();
+    let mut poly = Polygon::<8>::default();
     for p in [fc + du + dv, fc - du + dv, fc - du - dv, fc + du - dv] {
         poly.push(p);
     }
@@ -128,30 +129,12 @@ pub fn box_box(
             poly = poly.clip(&n, offset);
         }
     }
-    let depth = |p: &Vector3<f64>| n_ref.dot(&(p - centre));
-    let kept = poly.reduce(&n_ref, depth);
-    for (feature, &p) in kept.iter().enumerate() {
-        let gap = depth(&p);
-        if gap > within {
-            continue;
-        }
-        let on_ref = p - n_ref * gap;
-        let (on_a, on_b, normal) = if reference_is_a {
-            (on_ref, p, -n_ref)
-        } else {
-            (p, on_ref, n_ref)
-        };
-        out.push(Geometry {
-            a,
-            b: Counterpart::Body(b),
-            feature,
-            gap,
-            normal,
-            point: p - n_ref * (0.5 * gap),
-            r_a: on_a - pa.x,
-            r_b: on_b - pb.x,
-        });
-    }
+    let reference = Reference {
+        is_a: reference_is_a,
+        normal: n_ref,
+        on: centre,
+    };
+    push_face_contacts((a, pa), (b, pb), &poly, &reference, within, out);
 }
 
 /// The contact of an edge pair: A's edge `i` nearest B along `-l` and
@@ -192,99 +175,5 @@ fn edge_contact(
             r_a: on_a - pa.x,
             r_b: on_b - pb.x,
         });
-    }
-}
-
-/// A convex polygon of at most eight points (a quadrilateral clipped by
-/// four half-planes), on the stack.
-#[derive(Clone, Copy)]
-struct Polygon {
-    p: [Vector3<f64>; 8],
-    n: usize,
-}
-
-impl Default for Polygon {
-    fn default() -> Self {
-        Polygon {
-            p: [Vector3::zeros(); 8],
-            n: 0,
-        }
-    }
-}
-
-impl Polygon {
-    fn push(&mut self, p: Vector3<f64>) {
-        if self.n < self.p.len() {
-            self.p[self.n] = p;
-            self.n += 1;
-        }
-    }
-
-    fn points(&self) -> &[Vector3<f64>] {
-        &self.p[..self.n]
-    }
-
-    /// The part with `n . p <= offset` (Sutherland-Hodgman).
-    fn clip(&self, n: &Vector3<f64>, offset: f64) -> Polygon {
-        let mut out = Polygon::default();
-        let pts = self.points();
-        for (k, &p) in pts.iter().enumerate() {
-            let q = pts[(k + 1) % pts.len()];
-            let (dp, dq) = (n.dot(&p) - offset, n.dot(&q) - offset);
-            if dp <= 0.0 {
-                out.push(p);
-            }
-            if (dp < 0.0 && dq > 0.0) || (dp > 0.0 && dq < 0.0) {
-                out.push(p + (q - p) * (dp / (dp - dq)));
-            }
-        }
-        out
-    }
-
-    /// At most four of the points, in their order: all when four or
-    /// fewer; else the deepest, the one farthest from it, the one making
-    /// the largest triangle with those, and the one adding the most area
-    /// outside that triangle (Box2D's and Bullet's manifold reduction).
-    fn reduce(&self, normal: &Vector3<f64>, depth: impl Fn(&Vector3<f64>) -> f64) -> Polygon {
-        let pts = self.points();
-        if pts.len() <= 4 {
-            return *self;
-        }
-        // The best-scoring point not yet picked, ties to the first.
-        let arg_max = |picked: &[usize], score: &dyn Fn(usize) -> f64| {
-            (0..pts.len())
-                .filter(|k| !picked.contains(k))
-                .max_by(|&x, &y| score(x).total_cmp(&score(y)).then(y.cmp(&x)))
-                .expect("more than four points")
-        };
-        let p0 = arg_max(&[], &|k| -depth(&pts[k]));
-        let p1 = arg_max(&[p0], &|k| (pts[k] - pts[p0]).norm_squared());
-        let area =
-            |x: usize, y: usize, k: usize| (pts[y] - pts[x]).cross(&(pts[k] - pts[x])).dot(normal);
-        let p2 = arg_max(&[p0, p1], &|k| area(p0, p1, k).abs());
-        // The fourth lies across one of the triangle's sides from its
-        // third corner: the largest such triangle.
-        let side = area(p0, p1, p2).signum();
-        let outside = |k: usize| {
-            [(p0, p1), (p1, p2), (p2, p0)]
-                .iter()
-                .map(|&(x, y)| -side * area(x, y, k))
-                .fold(f64::NEG_INFINITY, f64::max)
-        };
-        let p3 = arg_max(&[p0, p1, p2], &outside);
-        let mut keep = [p0, p1, p2, p3];
-        keep.sort_unstable();
-        let mut out = Polygon::default();
-        for k in keep {
-            out.push(pts[k]);
-        }
-        out
-    }
-}
-
-impl std::ops::Deref for Polygon {
-    type Target = [Vector3<f64>];
-    fn deref(&self) -> &[Vector3<f64>] {
-        self.points()
     }
 }

@@ -25,14 +25,33 @@ pub fn capsule_box(
     within: f64,
     out: &mut Vec<Geometry>,
 ) {
+    let distance = |p: &Vector3<f64>| box_signed_distance(p, h);
+    let ball = |c: Vector3<f64>, feature| ball_box(a, c, r, Some(c - pa.x), b, pb, h, feature);
+    capsule_against(pa, l, pb, distance, ball, within, out);
+}
+
+/// A capsule's segment of half length `l` (its body at `pa`) against a
+/// convex body B at `pb` whose signed distance (B's frame) is `distance`:
+/// `ball(centre, feature)`'s contact at each end (features 0 and 1) and,
+/// where a point inside the segment is nearer than both ends, there
+/// (feature 2), those whose gap is at most `within`.
+pub fn capsule_against(
+    pa: &Pose,
+    l: f64,
+    pb: &Pose,
+    distance: impl Fn(&Vector3<f64>) -> f64,
+    ball: impl Fn(Vector3<f64>, usize) -> Geometry,
+    within: f64,
+    out: &mut Vec<Geometry>,
+) {
     let ends = pa.segment(l);
     let (e0, e1) = (pb.local(&ends[0]), pb.local(&ends[1]));
-    let sd = |t: f64| box_signed_distance(&(e0 + (e1 - e0) * t), h);
+    let sd = |t: f64| distance(&(e0 + (e1 - e0) * t));
     let t = minimise_convex(sd);
     let inner = (sd(t) < sd(0.0).min(sd(1.0)) - INTERIOR_NEARER)
         .then(|| pa.point(&Vector3::new(0.0, 0.0, (2.0 * t - 1.0) * l)));
     let mut push = |c: Vector3<f64>, feature: usize| {
-        let g = ball_box(a, c, r, Some(c - pa.x), b, pb, h, feature);
+        let g = ball(c, feature);
         if g.gap <= within {
             out.push(g);
         }

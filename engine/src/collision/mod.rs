@@ -13,6 +13,8 @@ pub use broad::Still;
 mod capsule_box;
 mod capsule_capsule;
 mod capsule_plane;
+mod hull;
+mod manifold;
 mod segment;
 mod sphere_box;
 mod sphere_capsule;
@@ -25,7 +27,7 @@ use nalgebra::Vector3;
 
 pub use box_plane::vertex;
 pub use broad::Broad;
-pub use segment::Pose;
+pub use segment::{nearest_on_segment, Pose};
 pub use sphere_plane::sphere_plane;
 pub use sphere_sphere::sphere_sphere;
 
@@ -189,7 +191,7 @@ pub fn body_plane(
     for (k, g) in model.bodies[i].shapes.iter().enumerate() {
         let start = out.len();
         let at = placed(&body, g);
-        shape_plane(g.shape, i, &at, p, plane, within, out);
+        shape_plane(model, g.shape, i, &at, p, plane, within, out);
         if g.offset.is_some() || k > 0 {
             from_shapes(model, state, (k, &at), (0, None), &mut out[start..]);
         }
@@ -197,7 +199,9 @@ pub fn body_plane(
 }
 
 /// One shape of body `i`, at `at`, against plane `p`.
+#[allow(clippy::too_many_arguments)]
 fn shape_plane(
+    model: &Model,
     shape: Shape,
     i: usize,
     at: &Pose,
@@ -218,6 +222,9 @@ fn shape_plane(
             radius,
             half_length,
         } => capsule_plane::capsule_plane(i, at, (radius, half_length), p, plane, within, out),
+        Shape::Hull { index, .. } => {
+            hull::hull_plane(i, at, &model.hulls[index], p, plane, within, out)
+        }
     }
 }
 
@@ -241,7 +248,7 @@ pub fn body_pair(
             // Both at their centres of mass: a body's one shape, computed
             // as it always was.
             let centred = ga.offset.is_none() && gb.offset.is_none();
-            shape_pair((i, ga.shape, &pa), (j, gb.shape, &pb), within, centred, out);
+            shape_pair(model, (i, ga, &pa), (j, gb, &pb), within, centred, out);
             if !centred || ka > 0 || kb > 0 {
                 from_shapes(model, state, (ka, &pa), (kb, Some(&pb)), &mut out[start..]);
             }
@@ -253,26 +260,31 @@ pub fn body_pair(
 /// `centred`: both shapes are their bodies' one shape at the centre of
 /// mass, where a pair of spheres is listed whatever its gap.
 fn shape_pair(
-    (i, si, pi): (usize, Shape, &Pose),
-    (j, sj, pj): (usize, Shape, &Pose),
+    model: &Model,
+    (i, gi, pi): (usize, &Geom, &Pose),
+    (j, gj, pj): (usize, &Geom, &Pose),
     within: f64,
     centred: bool,
     out: &mut Vec<Geometry>,
 ) {
-    use Shape::{Box, Capsule, Sphere};
+    use Shape::{Box, Capsule, Hull, Sphere};
     // Each pair's file takes its shapes in one order (sphere, capsule,
-    // box): a pair in the other order is computed as (j, i) and flipped.
+    // box, hull): a pair in the other order is computed as (j, i) and
+    // flipped.
     let rank = |s: &Shape| match s {
         Sphere { .. } => 0,
         Capsule { .. } => 1,
         Box { .. } => 2,
+        Hull { .. } => 3,
     };
-    let flip = rank(&si) > rank(&sj);
-    let ((a, sa, pa), (b, sb, pb)) = if flip {
-        ((j, sj, *pj), (i, si, *pi))
+    let flip = rank(&gi.shape) > rank(&gj.shape);
+    let ((a, ga, pa), (b, gb, pb)) = if flip {
+        ((j, gj, *pj), (i, gi, *pi))
     } else {
-        ((i, si, *pi), (j, sj, *pj))
+        ((i, gi, *pi), (j, gj, *pj))
     };
+    let (sa, sb) = (ga.shape, gb.shape);
+    let hulls = &model.hulls;
     let start = out.len();
     match (sa, sb) {
         // Listed whatever `within` says: the broad phase's test for a pair
@@ -322,8 +334,41 @@ fn shape_pair(
         (Box { half: ha }, Box { half: hb }) => {
             box_box::box_box(a, &pa, &ha, b, &pb, &hb, within, out)
         }
+        (Sphere { radius }, Hull { index, .. }) => {
+            let g = hull::ball_hull(a, pa.x, radius, None, b, &pb, &hulls[index], 0);
+            if g.gap <= within {
+                out.push(g);
+            }
+        }
+        (
+            Capsule {
+                radius,
+                half_length,
+            },
+            Hull { index, .. },
+        ) => hull::capsule_hull(
+            a,
+            &pa,
+            (radius, half_length),
+            b,
+            &pb,
+            &hulls[index],
+            within,
+            out,
+        ),
+        (Box { .. }, Hull { index, .. }) => {
+            // A box in a scene with hulls has its hull (`Geom::hull`).
+            if let Some(h) = ga.hull {
+                hull::hull_hull(a, &pa, &hulls[h], b, &pb, &hulls[index], within, out)
+            }
+        }
+        (Hull { index: ia, .. }, Hull { index: ib, .. }) => {
+            hull::hull_hull(a, &pa, &hulls[ia], b, &pb, &hulls[ib], within, out)
+        }
         // Ordered by rank above.
-        (Capsule { .. } | Box { .. }, Sphere { .. }) | (Box { .. }, Capsule { .. }) => {
+        (Capsule { .. } | Box { .. } | Hull { .. }, Sphere { .. })
+        | (Box { .. } | Hull { .. }, Capsule { .. })
+        | (Hull { .. }, Box { .. }) => {
             unreachable!("a pair is taken in the rank's order")
         }
     }

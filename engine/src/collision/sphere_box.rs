@@ -20,19 +20,32 @@ pub fn ball_box(
 ) -> Geometry {
     let p = pose.local(&c);
     let (s, n_local) = box_surface(&p, h);
-    let n = pose.q.transform_vector(&n_local);
     // Signed distance of the centre from the surface along the normal.
     let depth = (p - s).dot(&n_local);
+    ball_on_surface((a, r, offset), b, pose, (depth, s, n_local), feature)
+}
+
+/// A ball of radius `r` (part of body A at lever offset `offset`) whose
+/// centre lies `depth` from body B's surface along the outward normal
+/// `n_local` at surface point `s` (both in B's frame, B at `pose`).
+pub fn ball_on_surface(
+    (a, r, offset): (usize, f64, Option<Vector3<f64>>),
+    b: usize,
+    pose: &Pose,
+    (depth, s, n_local): (f64, Vector3<f64>, Vector3<f64>),
+    feature: usize,
+) -> Geometry {
+    let n = pose.q.transform_vector(&n_local);
     let gap = depth - r;
-    let on_box = pose.point(&s);
+    let on_b = pose.point(&s);
     Geometry {
         a,
         b: Counterpart::Body(b),
         feature,
         gap,
         normal: n,
-        point: on_box + n * (0.5 * gap),
+        point: on_b + n * (0.5 * gap),
         r_a: super::sphere_sphere::lever(offset, -n * r),
-        r_b: on_box - pose.x,
+        r_b: on_b - pose.x,
     }
 }

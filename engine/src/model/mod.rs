@@ -4,6 +4,7 @@
 //! stage above shares (the islands' union-find, a joint's anchor). It
 //! imports no stage.
 
+pub mod hull;
 pub mod islands;
 pub mod kinematics;
 pub mod params;
@@ -33,12 +34,28 @@ pub enum Shape {
     Box {
         half: Vector3<f64>,
     },
+    /// A convex hull, `Model::hulls[index]`; `bound` its farthest
+    /// vertex's distance from the shape's origin.
+    Hull {
+        index: usize,
+        bound: f64,
+    },
 }
 
 impl Shape {
-    pub fn from_desc(d: cosim_shared::ShapeDesc) -> Shape {
+    /// The shape of a description; a hull's is added to `hulls`.
+    pub fn from_desc(d: &cosim_shared::ShapeDesc, hulls: &mut Vec<hull::Hull>) -> Shape {
         use cosim_shared::ShapeDesc as D;
-        match d {
+        match *d {
+            D::Hull { ref points } => {
+                let h = hull::Hull::new(points);
+                let bound = h.bound;
+                hulls.push(h);
+                Shape::Hull {
+                    index: hulls.len() - 1,
+                    bound,
+                }
+            }
             D::Sphere { radius } => Shape::Sphere { radius },
             D::Capsule {
                 radius,
@@ -85,6 +102,9 @@ impl Shape {
                     mc * (r * r / 4.0 + l * l / 3.0) + ms * (0.4 * r * r + l * l + 0.75 * l * r);
                 Matrix3::from_diagonal(&Vector3::new(across, across, axial))
             }
+            // A body with a hull gives its inertia (validated): a ball's
+            // of the bound, never used.
+            Shape::Hull { bound, .. } => Matrix3::identity() * (0.4 * mass * bound * bound),
         }
     }
 
@@ -101,6 +121,8 @@ impl Shape {
                 half_length,
             } => radius + half_length * d.z.abs(),
             Shape::Box { half } => half.dot(&d.abs()),
+            // Its bounding ball's (the figures' shadows only).
+            Shape::Hull { bound, .. } => bound,
         }
     }
 
@@ -126,6 +148,7 @@ impl Shape {
                 half_length,
             } => radius + half_length,
             Shape::Box { half } => half.norm(),
+            Shape::Hull { bound, .. } => bound,
         }
     }
 }
@@ -145,6 +168,9 @@ pub struct Offset {
 pub struct Geom {
     pub shape: Shape,
     pub offset: Option<Offset>,
+    /// A box's hull (`Model::hulls`), in a scene with hulls: a box against
+    /// a hull is a pair of hulls.
+    pub hull: Option<usize>,
 }
 
 impl Geom {
@@ -393,6 +419,9 @@ pub struct Model {
     /// `collide = false` keeps out of contact (MuJoCo's parent-child
     /// filter, Drake's collision filter groups).
     pub excluded: Vec<(usize, usize)>,
+    /// Per body, its collision group (the scene's `group`, numbered in
+    /// order of first use): bodies of one group never touch each other.
+    pub group: Vec<Option<usize>>,
     /// Per body, whether it is a side of some joint (such a body never
     /// sleeps, and the projection out of deep penetration leaves it).
     pub jointed: Vec<bool>,
@@ -410,6 +439,8 @@ pub struct Model {
     /// `(shape of A * shape_slots + shape of B) * per pair + its own`
     /// (`Model::shape_feature`).
     pub shape_slots: usize,
+    /// The scene's convex hulls (`Shape::Hull`, `Geom::hull`).
+    pub hulls: Vec<hull::Hull>,
 }
 
 pub use cosim_shared::MAX_FEATURES;
@@ -429,6 +460,12 @@ impl Model {
     /// this could not handle, so nothing here can fail.
     pub fn from_scene(scene: &Scene) -> Model {
         let v3 = |a: [f64; 3]| Vector3::new(a[0], a[1], a[2]);
+        let mut hulls = Vec::new();
+        let any_hull = scene
+            .bodies
+            .iter()
+            .flat_map(|b| b.shapes())
+            .any(|p| matches!(p.shape, cosim_shared::ShapeDesc::Hull { .. }));
         let bodies: Vec<Body> = scene
             .bodies
             .iter()
@@ -437,7 +474,14 @@ impl Model {
                     .shapes()
                     .iter()
                     .map(|p| Geom {
-                        shape: Shape::from_desc(p.shape),
+                        shape: Shape::from_desc(&p.shape, &mut hulls),
+                        hull: match p.shape {
+                            cosim_shared::ShapeDesc::Box { half_extents: h } if any_hull => {
+                                hulls.push(hull::Hull::cuboid(&v3(h)));
+                                Some(hulls.len() - 1)
+                            }
+                            _ => None,
+                        },
                         offset: (!p.centred()).then(|| {
                             let [w, x, y, z] = p.orientation;
                             Offset {
@@ -606,6 +650,24 @@ impl Model {
             joint_start,
             weld,
             excluded,
+            group: {
+                let mut names: Vec<&str> = Vec::new();
+                scene
+                    .bodies
+                    .iter()
+                    .map(|b| {
+                        b.group
+                            .as_deref()
+                            .map(|g| match names.iter().position(|n| *n == g) {
+                                Some(k) => k,
+                                None => {
+                                    names.push(g);
+                                    names.len() - 1
+                                }
+                            })
+                    })
+                    .collect()
+            },
             jointed,
             motors: joints_with_motors,
             params: Params {
@@ -649,6 +711,7 @@ impl Model {
                 .max()
                 .unwrap_or(1)
                 .max(1),
+            hulls,
         }
     }
 
@@ -721,10 +784,12 @@ impl Model {
     }
 
     /// Whether bodies `i` and `j` can be in contact: not in one weld
-    /// group (`Model::weld`) nor a pair a joint keeps apart
-    /// (`Model::excluded`).
+    /// group (`Model::weld`), nor one collision group (`Model::group`), nor
+    /// a pair a joint keeps apart (`Model::excluded`).
     pub fn may_touch(&self, i: usize, j: usize) -> bool {
-        self.weld[i] != self.weld[j] && self.excluded.binary_search(&(i.min(j), i.max(j))).is_err()
+        self.weld[i] != self.weld[j]
+            && (self.group[i].is_none() || self.group[i] != self.group[j])
+            && self.excluded.binary_search(&(i.min(j), i.max(j))).is_err()
     }
 
     /// Per joint, whether it has a motor (what a motor target may name).

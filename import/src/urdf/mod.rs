@@ -21,7 +21,10 @@
 //!   (a motor holding rate 0 with at most that effort, MuJoCo's
 //!   `frictionloss`); a joint's two bodies do not collide (MuJoCo's
 //!   parent-child filter);
-//! - no floor unless the options ask for one.
+//! - a robot's links do not touch each other unless the options ask
+//!   (PyBullet's default; a scene `group`);
+//! - no floor unless the options ask for one, then under the robot's
+//!   lowest point.
 //!
 //! Not modelled yet, and said when a file has them: `<dynamics damping>`,
 //! `<mimic>` (the joint moves on its own). Cylinders are capsules of the
@@ -46,8 +49,11 @@ pub struct Options {
     /// Weld a root with mass to the world (a fixed-base arm described
     /// without a `world` link). Default: it floats.
     pub fixed_base: bool,
-    /// A floor plane at z = 0. Default: none.
+    /// A floor plane under the robot's lowest point. Default: none.
     pub floor: bool,
+    /// The robot's links touch each other (but a joint's two links).
+    /// Default: they do not, as in PyBullet unless asked.
+    pub self_collision: bool,
 }
 
 /// A scene read from a URDF, and what the reading has to say about it.
@@ -84,12 +90,32 @@ pub fn import(
     let mut s = format!(
         "[sim]\nname = {name:?}\ndt = 0.001\nduration = 3.0\ngravity = [0.0, 0.0, -9.81]\nfriction_directions = 8\n\n"
     );
+    let mut lowest = f64::INFINITY;
     if let Some(tree) = &tree {
-        tree.write(&robot, dir, options, &mut s, &mut problems, &mut notes);
+        tree.write(
+            &robot,
+            dir,
+            options,
+            &mut s,
+            &mut problems,
+            &mut notes,
+            &mut lowest,
+        );
     }
     problems.check()?;
     if options.floor {
-        s += "[[plane]]\nname = \"floor\"\nnormal = [0.0, 0.0, 1.0]\npoint = [0.0, 0.0, 0.0]\nfriction = 0.5\n\n";
+        // Under the robot's lowest point, so that it starts on the floor,
+        // not in it.
+        let z = if lowest.is_finite() { lowest } else { 0.0 };
+        if z != 0.0 {
+            notes.push(format!(
+                "the floor is at z = {z:.6} m, under the robot's lowest point"
+            ));
+        }
+        let _ = write!(
+            s,
+            "[[plane]]\nname = \"floor\"\nnormal = [0.0, 0.0, 1.0]\npoint = [0.0, 0.0, {z:?}]\nfriction = 0.5\n\n"
+        );
     }
     let scene = Scene::parse(&s, file)?;
     Ok(Imported { scene, notes })
@@ -276,7 +302,9 @@ impl Tree {
                 || self.parent_joint[g].is_some_and(|j| robot.joints[j].kind == JointType::Fixed))
     }
 
-    /// Writes the bodies and joints.
+    /// Writes the bodies and joints; `lowest` takes the lowest z of the
+    /// shapes.
+    #[allow(clippy::too_many_arguments)]
     fn write(
         &self,
         robot: &read::Robot,
@@ -285,8 +313,10 @@ impl Tree {
         s: &mut String,
         problems: &mut Problems,
         notes: &mut Vec<String>,
+        lowest: &mut f64,
     ) {
         let links = &robot.links;
+        let mut meshes = crate::mesh::Meshes::default();
         // Per group: the body it is, or `world`.
         let mut body_name = vec![String::new(); links.len()];
         for g in self.groups() {
@@ -307,6 +337,25 @@ impl Tree {
                 .flat_map(|l| links[l].collisions.iter().map(move |c| (l, c)))
                 .collect();
             let held = self.held(robot, g);
+            for l in self.members(g) {
+                if let Some(i) = &links[l].inertial {
+                    let [xx, yy, zz, xy, xz, yz] = i.inertia;
+                    let full = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
+                    if i.mass > 0.0 && !positive_definite(&full) {
+                        notes.push(format!(
+                            "link {:?}: its inertia {:?} is not positive definite: {} taken",
+                            links[l].name,
+                            i.inertia,
+                            if positive_definite(&Matrix3::from_diagonal(&Vector3::new(xx, yy, zz)))
+                            {
+                                "its diagonal (as PyBullet reads it)"
+                            } else {
+                                "a ball's of its diagonal's mean"
+                            }
+                        ));
+                    }
+                }
+            }
             let mass = Mass::of(self, links, g);
             if held && shapes.is_empty() && mass.is_none() {
                 body_name[g] = "world".into();
@@ -344,9 +393,14 @@ impl Tree {
                     continue;
                 }
             };
+            if !options.self_collision {
+                let _ = writeln!(s, "[[body]]\ngroup = {:?}", robot.name);
+            } else {
+                s.push_str("[[body]]\n");
+            }
             let _ = write!(
                 s,
-                "[[body]]\nname = {name:?}\nmass = {mass:?}\ninertia = [{:?}, {:?}, {:?}, {:?}, {:?}, {:?}]\nposition = {}\norientation = {}\nfriction = 0.5\n",
+                "name = {name:?}\nmass = {mass:?}\ninertia = [{:?}, {:?}, {:?}, {:?}, {:?}, {:?}]\nposition = {}\norientation = {}\nfriction = 0.5\n",
                 inertia[(0, 0)],
                 inertia[(1, 1)],
                 inertia[(2, 2)],
@@ -357,7 +411,10 @@ impl Tree {
                 quat(&at.rotation),
             );
             for (l, c) in shapes {
-                if let Some(shape) = shape_text(c, &links[l].name, dir, problems, notes) {
+                if let Some((shape, support)) =
+                    shape_text(c, &links[l].name, dir, &mut meshes, problems, notes)
+                {
+                    *lowest = lowest.min(support.lowest(&(self.frame[l] * c.origin)));
                     let pose = at.inverse() * self.frame[l] * c.origin;
                     let _ = write!(
                         s,
@@ -413,10 +470,21 @@ impl Tree {
                 continue;
             };
             let at = self.frame[p] * j.origin;
+            // A URDF's links and joints have names of their own kinds; a
+            // scene's are one set: a joint named as a body is renamed.
+            let name = if body_name.contains(&j.name) {
+                let renamed = format!("{}_joint", j.name);
+                notes.push(format!(
+                    "joint {:?} is named as a link: it is {renamed:?} here",
+                    j.name
+                ));
+                renamed
+            } else {
+                j.name.clone()
+            };
             let _ = write!(
                 s,
-                "[[joint]]\nname = {:?}\ntype = \"{kind}\"\nbody_a = {a:?}\nbody_b = {b:?}\nanchor = {}\ncollide = false\n",
-                j.name,
+                "[[joint]]\nname = {name:?}\ntype = \"{kind}\"\nbody_a = {a:?}\nbody_b = {b:?}\nanchor = {}\ncollide = false\n",
                 v3(&at.translation.vector)
             );
             if matches!(kind, "revolute" | "prismatic") {
@@ -435,7 +503,19 @@ impl Tree {
             {
                 // PyBullet's rule: lower > upper is no limit; so is a
                 // hinge's range of a full turn or more.
-                let full = j.kind == JointType::Revolute && hi - lo >= 2.0 * std::f64::consts::PI;
+                use std::f64::consts::PI;
+                let full = j.kind == JointType::Revolute && hi - lo >= 2.0 * PI;
+                // A hinge's coordinate lies in [-pi, pi] here: a limit
+                // beyond is held at pi, and said.
+                let (lo, hi) = if j.kind == JointType::Revolute && (lo < -PI || hi > PI) && !full {
+                    notes.push(format!(
+                        "joint {:?}: its limits [{lo}, {hi}] rad are held within [-pi, pi]",
+                        j.name
+                    ));
+                    (lo.max(-PI), hi.min(PI))
+                } else {
+                    (lo, hi)
+                };
                 if lo < hi && !full {
                     let _ = writeln!(s, "range = [{lo:?}, {hi:?}]");
                 }
@@ -464,48 +544,88 @@ impl Tree {
     }
 }
 
-/// A collision's shape as scene keys, or `None` (with a problem) for what
-/// is not read.
+/// What a shape reaches, for its lowest point: a capsule (radius, half
+/// length along z; a ball's is 0), a box (half extents), a hull (points).
+enum Support {
+    Capsule(f64, f64),
+    Box([f64; 3]),
+    Points(Vec<[f64; 3]>),
+}
+
+impl Support {
+    /// The lowest world z of the shape at `at`.
+    fn lowest(&self, at: &Isometry3<f64>) -> f64 {
+        let z = at.translation.vector.z;
+        let r = at.rotation.to_rotation_matrix();
+        let up = r.matrix().row(2);
+        match self {
+            Support::Capsule(radius, half) => z - radius - half * up[2].abs(),
+            Support::Box(h) => z - (0..3).map(|k| h[k] * up[k].abs()).sum::<f64>(),
+            Support::Points(p) => p
+                .iter()
+                .map(|v| (at * nalgebra::Point3::from(*v)).z)
+                .fold(f64::INFINITY, f64::min),
+        }
+    }
+}
+
+/// A collision's shape as scene keys and its support, or `None` (with a
+/// problem) for what is not read.
 fn shape_text(
     c: &read::Collision,
     link: &str,
     dir: Option<&Path>,
+    meshes: &mut crate::mesh::Meshes,
     problems: &mut Problems,
     notes: &mut Vec<String>,
-) -> Option<String> {
+) -> Option<(String, Support)> {
     Some(match &c.geometry {
-        Geometry::Sphere(r) => format!("radius = {r:?}\n"),
-        Geometry::Box(size) => format!(
-            "half_extents = [{:?}, {:?}, {:?}]\n",
-            size[0] / 2.0,
-            size[1] / 2.0,
-            size[2] / 2.0
-        ),
-        Geometry::Capsule { radius, length } => {
-            format!("radius = {radius:?}\nhalf_length = {:?}\n", length / 2.0)
+        Geometry::Sphere(r) => (format!("radius = {r:?}\n"), Support::Capsule(*r, 0.0)),
+        Geometry::Box(size) => {
+            let h = size.map(|x| x / 2.0);
+            (
+                format!("half_extents = [{:?}, {:?}, {:?}]\n", h[0], h[1], h[2]),
+                Support::Box(h),
+            )
         }
+        Geometry::Capsule { radius, length } => (
+            format!("radius = {radius:?}\nhalf_length = {:?}\n", length / 2.0),
+            Support::Capsule(*radius, length / 2.0),
+        ),
         Geometry::Cylinder { radius, length } => {
             let half = length / 2.0 - radius;
             notes.push(format!(
                 "link {link:?}: a cylinder is a capsule here (same radius and overall length)"
             ));
             if half > 0.0 {
-                format!("radius = {radius:?}\nhalf_length = {half:?}\n")
+                (
+                    format!("radius = {radius:?}\nhalf_length = {half:?}\n"),
+                    Support::Capsule(*radius, half),
+                )
             } else {
-                format!("radius = {:?}\n", radius.max(length / 2.0))
+                let r = radius.max(length / 2.0);
+                (format!("radius = {r:?}\n"), Support::Capsule(r, 0.0))
             }
         }
-        Geometry::Mesh { filename, .. } => {
-            let found = match package::resolve(filename, dir) {
-                Ok(p) => format!("found at {}", p.display()),
-                Err(e) => e,
-            };
-            problems.add(
-                c.line,
-                format!("link {link:?} <collision>"),
-                format!("the mesh {filename:?} ({found}): meshes are not read yet"),
-            );
-            return None;
+        Geometry::Mesh { filename, scale } => {
+            let what = format!("link {link:?} <collision>");
+            let hull = package::resolve(filename, dir).and_then(|p| meshes.hull(&p, *scale));
+            match hull {
+                Ok(points) => {
+                    let list: Vec<String> = points
+                        .iter()
+                        .map(|v| format!("[{:?}, {:?}, {:?}]", v[0], v[1], v[2]))
+                        .collect();
+                    (
+                        format!("hull = [{}]\n", list.join(", ")),
+                        Support::Points(points),
+                    )
+                }
+                Err(e) => {
+                    problems.add(c.line, what, format!("the mesh {filename:?}: {e}"));
+                    return None;
+                }
+            }
         }
     })
 }
@@ -526,14 +646,7 @@ impl Mass {
             .members(g)
             .filter_map(|l| {
                 let i = links[l].inertial.as_ref()?;
-                let [xx, yy, zz, xy, xz, yz] = i.inertia;
-                (i.mass > 0.0).then(|| {
-                    (
-                        i.mass,
-                        tree.frame[l] * i.origin,
-                        Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz),
-                    )
-                })
+                (i.mass > 0.0).then(|| (i.mass, tree.frame[l] * i.origin, inertia_of(i)))
             })
             .collect();
         let mass: f64 = parts.iter().map(|p| p.0).sum();
@@ -574,4 +687,27 @@ impl Mass {
             inertia,
         })
     }
+}
+
+/// A link's inertia matrix as written; where it is not positive definite
+/// (files carry such), its diagonal, as PyBullet reads every inertia, or
+/// failing that a ball's of the diagonal's mean (`Tree::write` says so).
+fn inertia_of(i: &read::Inertial) -> Matrix3<f64> {
+    let [xx, yy, zz, xy, xz, yz] = i.inertia;
+    let full = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
+    if positive_definite(&full) {
+        return full;
+    }
+    let diagonal = Matrix3::from_diagonal(&nalgebra::Vector3::new(xx, yy, zz));
+    if positive_definite(&diagonal) {
+        return diagonal;
+    }
+    let mean = ((xx.abs() + yy.abs() + zz.abs()) / 3.0).max(1e-9 * i.mass.max(1e-9));
+    Matrix3::identity() * mean
+}
+
+/// Whether a symmetric matrix is positive definite (its Cholesky factor
+/// exists).
+pub(crate) fn positive_definite(m: &Matrix3<f64>) -> bool {
+    m.iter().all(|x| x.is_finite()) && m.cholesky().is_some()
 }

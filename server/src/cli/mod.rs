@@ -324,9 +324,14 @@ pub struct RobotArgs {
     /// arm); by default it floats, as in PyBullet and Drake.
     #[arg(long)]
     pub fixed_base: bool,
-    /// Add a floor plane at z = 0 under a URDF robot (none by default).
+    /// Add a floor plane under a URDF robot's lowest point (none by
+    /// default).
     #[arg(long)]
     pub floor: bool,
+    /// A URDF robot's links touch each other (a joint's two links never);
+    /// by default they do not, as in PyBullet.
+    #[arg(long)]
+    pub self_collision: bool,
 }
 
 #[derive(clap::Args, Debug, Clone)]

@@ -19,6 +19,7 @@ pub fn load(args: &RunArgs) -> Result<Scene, SceneError> {
             let options = cosim_import::urdf::Options {
                 fixed_base: args.robot.fixed_base,
                 floor: args.robot.floor,
+                self_collision: args.robot.self_collision,
             };
             let imported = cosim_import::urdf::load(path, options)?;
             if !args.quiet {

@@ -36,6 +36,11 @@ pub struct BodyDesc {
     /// Constant world-frame force (N) on the centre of mass, besides gravity.
     #[serde(default)]
     pub force: [f64; 3],
+    /// Bodies of one `group` never touch each other (a robot's links, as
+    /// PyBullet leaves a robot without self-collision unless asked; Drake's
+    /// collision filter groups); they touch everything else.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub group: Option<String>,
     /// `[[body.shape]]`: the body's shapes, each at its own pose in the
     /// body's frame, instead of one shape at the centre of mass given by
     /// the fields above; none at all for a body that touches nothing (a
@@ -57,6 +62,9 @@ pub struct ShapeEntry {
     pub half_length: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub half_extents: Option<[f64; 3]>,
+    /// Instead of the above: the convex hull of these points.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hull: Option<Vec<[f64; 3]>>,
     #[serde(default)]
     pub position: [f64; 3],
     /// Unit quaternion, scalar first.
@@ -65,7 +73,7 @@ pub struct ShapeEntry {
 }
 
 /// A shape at its pose in its body's frame (`BodyDesc::shapes`).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct PlacedShape {
     pub shape: ShapeDesc,
     pub position: [f64; 3],
@@ -96,7 +104,7 @@ pub fn contact_label(a: &str, b: &str, feature: usize) -> String {
 }
 
 /// A body's shape as the scene gives it (`BodyDesc::shape`).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum ShapeDesc {
     Sphere {
         radius: f64,
@@ -108,6 +116,11 @@ pub enum ShapeDesc {
     },
     Box {
         half_extents: [f64; 3],
+    },
+    /// The convex hull of these points (a collision mesh's, as MuJoCo and
+    /// PyBullet take it), in the shape's frame.
+    Hull {
+        points: Vec<[f64; 3]>,
     },
 }
 
@@ -146,7 +159,22 @@ fn shape_of(
 
 impl ShapeEntry {
     pub fn shape_or_error(&self) -> Result<ShapeDesc, (&'static str, String)> {
-        shape_of(self.radius, self.half_length, self.half_extents)
+        match &self.hull {
+            None => shape_of(self.radius, self.half_length, self.half_extents),
+            Some(points)
+                if self.radius.is_none()
+                    && self.half_length.is_none()
+                    && self.half_extents.is_none() =>
+            {
+                Ok(ShapeDesc::Hull {
+                    points: points.clone(),
+                })
+            }
+            Some(_) => Err((
+                "hull",
+                "with radius, half_length or half_extents: a shape is one of them".into(),
+            )),
+        }
     }
 }
 

@@ -6,6 +6,7 @@
 //! for syntax errors, the line and column that TOML reports.
 
 mod body;
+pub mod hull;
 mod joint;
 mod sim;
 mod validate;

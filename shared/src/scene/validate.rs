@@ -117,12 +117,18 @@ impl Scene {
                 finite3(&e.position).map_err(|m| err(g("position"), m))?;
                 unit_quaternion(&e.orientation).map_err(|m| err(g("orientation"), m))?;
             }
-            let centred = b.shapes().iter().all(|p| p.centred());
-            if b.inertia.is_none() && !(b.shape.is_empty() || b.shape.len() == 1 && centred) {
+            let shapes = b.shapes();
+            let centred = shapes.iter().all(|p| p.centred());
+            let hull = shapes
+                .iter()
+                .any(|p| matches!(p.shape, ShapeDesc::Hull { .. }));
+            if b.inertia.is_none()
+                && (hull || !(b.shape.is_empty() || b.shape.len() == 1 && centred))
+            {
                 return Err(err(
                     f("inertia"),
-                    "is missing: a body with no shape, several, or one away from its \
-                     centre of mass needs its inertia [ixx, iyy, izz, ixy, ixz, iyz] \
+                    "is missing: a body with no shape, several, a hull, or one away from \
+                     its centre of mass needs its inertia [ixx, iyy, izz, ixy, ixz, iyz] \
                      (about the centre of mass, in the body's frame)"
                         .into(),
                 ));
@@ -407,5 +413,8 @@ fn check_shape(
             }
             Ok(())
         }
+        ShapeDesc::Hull { points } => super::hull::convex_hull(&points)
+            .map(|_| ())
+            .map_err(|e| (field("hull"), format!("has no hull: {e}"))),
     }
 }
