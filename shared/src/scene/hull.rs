@@ -61,6 +61,11 @@ pub fn convex_hull(points: &[V]) -> Result<Hull, String> {
     if points.iter().flatten().any(|x| !x.is_finite()) {
         return Err("a point is not finite".into());
     }
+    // A mesh lists each vertex once per triangle: the distinct ones.
+    let mut unique: Vec<V> = points.to_vec();
+    unique.sort_unstable_by(|a, b| a.map(f64::to_bits).cmp(&b.map(f64::to_bits)));
+    unique.dedup();
+    let points = &unique[..];
     if points.len() < 4 {
         return Err(format!("{} points: a solid needs at least 4", points.len()));
     }
@@ -121,7 +126,9 @@ pub fn convex_hull(points: &[V]) -> Result<Hull, String> {
     }
     let mut seen: std::collections::HashSet<(usize, usize)> = Default::default();
     let mut orphans: Vec<usize> = Vec::new();
-    while let Some(f) = (0..tris.len()).find(|&k| tris[k].alive && !outside[k].is_empty()) {
+    // The faces alive, so that a step scans those only.
+    let mut alive: Vec<usize> = (0..tris.len()).collect();
+    while let Some(f) = alive.iter().copied().find(|&k| !outside[k].is_empty()) {
         let t = tris[f];
         let p = *outside[f]
             .iter()
@@ -134,8 +141,8 @@ pub fn convex_hull(points: &[V]) -> Result<Hull, String> {
         let x = points[p];
         seen.clear();
         orphans.clear();
-        for k in 0..tris.len() {
-            if tris[k].alive && beyond(&tris[k], x) {
+        for &k in &alive {
+            if beyond(&tris[k], x) {
                 tris[k].alive = false;
                 let v = tris[k].v;
                 seen.extend([(v[0], v[1]), (v[1], v[2]), (v[2], v[0])]);
@@ -150,7 +157,9 @@ pub fn convex_hull(points: &[V]) -> Result<Hull, String> {
             .filter(|&(a, b)| !seen.contains(&(b, a)))
             .collect();
         horizon.sort_unstable();
+        alive.retain(|&k| tris[k].alive);
         for (a, b) in horizon {
+            alive.push(tris.len());
             tris.push(tri(points, [a, b, p]));
             outside.push(Vec::new());
         }
