@@ -350,7 +350,7 @@ impl Tree {
                             {
                                 "its diagonal (as PyBullet reads it)"
                             } else {
-                                "a ball's of its diagonal's mean"
+                                "a solid ball's of radius 5 cm"
                             }
                         ));
                     }
@@ -517,6 +517,15 @@ impl Tree {
                     (lo, hi)
                 };
                 if lo < hi && !full {
+                    if !(lo..=hi).contains(&0.0) {
+                        // The file's zero pose is the scene's start: the
+                        // limit pulls the joint into range in one step.
+                        notes.push(format!(
+                            "joint {:?}: its zero lies outside its limits [{lo}, {hi}]: the first step \
+                             pulls it into range (initial joint positions are not read yet)",
+                            j.name
+                        ));
+                    }
                     let _ = writeln!(s, "range = [{lo:?}, {hi:?}]");
                 }
             }
@@ -689,9 +698,15 @@ impl Mass {
     }
 }
 
+/// The radius (m) of the solid ball whose inertia a link with mass but
+/// none given takes (icub's links carry zeros).
+const BALL: f64 = 0.05;
+
 /// A link's inertia matrix as written; where it is not positive definite
 /// (files carry such), its diagonal, as PyBullet reads every inertia, or
-/// failing that a ball's of the diagonal's mean (`Tree::write` says so).
+/// failing that a solid ball's of radius [`BALL`] and the link's mass
+/// (`Tree::write` says so): a zero inertia under a mass turns any torque
+/// into an unbounded spin.
 fn inertia_of(i: &read::Inertial) -> Matrix3<f64> {
     let [xx, yy, zz, xy, xz, yz] = i.inertia;
     let full = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
@@ -702,8 +717,7 @@ fn inertia_of(i: &read::Inertial) -> Matrix3<f64> {
     if positive_definite(&diagonal) {
         return diagonal;
     }
-    let mean = ((xx.abs() + yy.abs() + zz.abs()) / 3.0).max(1e-9 * i.mass.max(1e-9));
-    Matrix3::identity() * mean
+    Matrix3::identity() * (0.4 * i.mass * BALL * BALL)
 }
 
 /// Whether a symmetric matrix is positive definite (its Cholesky factor
