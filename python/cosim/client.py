@@ -234,21 +234,22 @@ class Names:
 
     def body(self, name: Union[str, int]) -> int:
         """The index of body `name` (an index passes through)."""
-        if isinstance(name, int):
-            return name
-        try:
-            return self._body[name]
-        except KeyError:
-            raise KeyError(f"no body named {name!r}; the bodies are {self.bodies}") from None
+        return _index(name, self._body, "body", "bodies", self.bodies)
 
     def joint(self, name: Union[str, int]) -> int:
         """The index of joint `name` (an index passes through)."""
-        if isinstance(name, int):
-            return name
-        try:
-            return self._joint[name]
-        except KeyError:
-            raise KeyError(f"no joint named {name!r}; the joints are {self.joints}") from None
+        return _index(name, self._joint, "joint", "joints", self.joints)
+
+
+def _index(name: Union[str, int], table: Dict[str, int], kind: str, kinds: str, names: List[str]) -> int:
+    """`name`'s index in `table` (an index passes through), or a KeyError
+    that lists the names there are."""
+    if isinstance(name, int):
+        return name
+    try:
+        return table[name]
+    except KeyError:
+        raise KeyError(f"no {kind} named {name!r}; the {kinds} are {names}") from None
 
 
 class _StateReader:

@@ -704,13 +704,7 @@ impl Model {
             },
             initial,
             features: scene.contact_features(),
-            shape_slots: scene
-                .bodies
-                .iter()
-                .map(|b| b.shapes().len())
-                .max()
-                .unwrap_or(1)
-                .max(1),
+            shape_slots: scene.most_shapes(),
             hulls,
         }
     }

@@ -139,6 +139,8 @@ struct Tree {
     world_root: bool,
     /// Per link, the joint whose child it is.
     parent_joint: Vec<Option<usize>>,
+    /// Per joint, its parent and child links (`None`: no such link, said).
+    ends: Vec<(Option<usize>, Option<usize>)>,
 }
 
 fn v3(v: &Vector3<f64>) -> String {
@@ -171,10 +173,15 @@ impl Tree {
                 );
             }
         }
+        let ends: Vec<(Option<usize>, Option<usize>)> = robot
+            .joints
+            .iter()
+            .map(|j| (index(&j.parent), index(&j.child)))
+            .collect();
         let mut parent_joint: Vec<Option<usize>> = vec![None; n];
         for (k, j) in robot.joints.iter().enumerate() {
             let what = format!("joint {:?}", j.name);
-            let (p, c) = (index(&j.parent), index(&j.child));
+            let (p, c) = ends[k];
             for (tag, name, found) in [("parent", &j.parent, p), ("child", &j.child, c)] {
                 if found.is_none() {
                     problems.add(
@@ -230,8 +237,13 @@ impl Tree {
         while k < order.len() {
             let l = order[k];
             k += 1;
-            for j in robot.joints.iter().filter(|j| index(&j.parent) == Some(l)) {
-                let Some(c) = index(&j.child) else { continue };
+            for (j, &(_, c)) in robot
+                .joints
+                .iter()
+                .zip(&ends)
+                .filter(|(_, e)| e.0 == Some(l))
+            {
+                let Some(c) = c else { continue };
                 if frame[c].is_some() {
                     continue;
                 }
@@ -251,7 +263,7 @@ impl Tree {
                 let Some(j) = parent_joint[l] else {
                     return false;
                 };
-                match index(&robot.joints[j].parent) {
+                match ends[j].0 {
                     Some(p) => l = p,
                     None => return true,
                 }
@@ -279,6 +291,7 @@ impl Tree {
             root,
             world_root,
             parent_joint,
+            ends,
         })
     }
 
@@ -338,22 +351,14 @@ impl Tree {
                 .collect();
             let held = self.held(robot, g);
             for l in self.members(g) {
-                if let Some(i) = &links[l].inertial {
-                    let [xx, yy, zz, xy, xz, yz] = i.inertia;
-                    let full = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
-                    if i.mass > 0.0 && !positive_definite(&full) {
-                        notes.push(format!(
-                            "link {:?}: its inertia {:?} is not positive definite: {} taken",
-                            links[l].name,
-                            i.inertia,
-                            if positive_definite(&Matrix3::from_diagonal(&Vector3::new(xx, yy, zz)))
-                            {
-                                "its diagonal (as PyBullet reads it)"
-                            } else {
-                                "a solid ball's of radius 5 cm"
-                            }
-                        ));
-                    }
+                let Some(i) = links[l].inertial.as_ref().filter(|i| i.mass > 0.0) else {
+                    continue;
+                };
+                if let (_, Some(instead)) = inertia_of(i) {
+                    notes.push(format!(
+                        "link {:?}: its inertia {:?} is not positive definite: {instead} taken",
+                        links[l].name, i.inertia,
+                    ));
                 }
             }
             let mass = Mass::of(self, links, g);
@@ -434,14 +439,13 @@ impl Tree {
                 );
             }
         }
-        let body_of = |link: &str| -> Option<&str> {
-            let l = links.iter().position(|k| k.name == link)?;
+        let body_of = |l: usize| -> Option<&str> {
             let name = &body_name[self.group[l]];
             (!name.is_empty()).then_some(name.as_str())
         };
-        for j in &robot.joints {
+        for (j, &ends) in robot.joints.iter().zip(&self.ends) {
             let what = format!("joint {:?}", j.name);
-            let Some(c) = links.iter().position(|k| k.name == j.child) else {
+            let (Some(p), Some(c)) = ends else {
                 continue;
             };
             let kind = match j.kind {
@@ -460,15 +464,21 @@ impl Tree {
                     continue;
                 }
             };
-            let (Some(a), Some(b)) = (body_of(&j.parent), body_of(&j.child)) else {
+            let (Some(a), Some(b)) = (body_of(p), body_of(c)) else {
                 continue;
             };
             if a == b {
                 continue;
             }
-            let Some(p) = links.iter().position(|k| k.name == j.parent) else {
+            let hinge_or_slider = matches!(kind, "revolute" | "prismatic");
+            if hinge_or_slider && j.axis.norm() <= 1e-12 {
+                problems.add(
+                    j.line,
+                    what,
+                    "<axis xyz=\"0 0 0\">: a hinge or slider needs an axis",
+                );
                 continue;
-            };
+            }
             let at = self.frame[p] * j.origin;
             // A URDF's links and joints have names of their own kinds; a
             // scene's are one set: a joint named as a body is renamed.
@@ -487,15 +497,7 @@ impl Tree {
                 "[[joint]]\nname = {name:?}\ntype = \"{kind}\"\nbody_a = {a:?}\nbody_b = {b:?}\nanchor = {}\ncollide = false\n",
                 v3(&at.translation.vector)
             );
-            if matches!(kind, "revolute" | "prismatic") {
-                if j.axis.norm() <= 1e-12 {
-                    problems.add(
-                        j.line,
-                        what,
-                        "<axis xyz=\"0 0 0\">: a hinge or slider needs an axis",
-                    );
-                    continue;
-                }
+            if hinge_or_slider {
                 let _ = writeln!(s, "axis = {}", v3(&(at.rotation * j.axis.normalize())));
             }
             if let (JointType::Revolute | JointType::Prismatic, Some(lo), Some(hi)) =
@@ -655,7 +657,7 @@ impl Mass {
             .members(g)
             .filter_map(|l| {
                 let i = links[l].inertial.as_ref()?;
-                (i.mass > 0.0).then(|| (i.mass, tree.frame[l] * i.origin, inertia_of(i)))
+                (i.mass > 0.0).then(|| (i.mass, tree.frame[l] * i.origin, inertia_of(i).0))
             })
             .collect();
         let mass: f64 = parts.iter().map(|p| p.0).sum();
@@ -704,20 +706,23 @@ const BALL: f64 = 0.05;
 
 /// A link's inertia matrix as written; where it is not positive definite
 /// (files carry such), its diagonal, as PyBullet reads every inertia, or
-/// failing that a solid ball's of radius [`BALL`] and the link's mass
-/// (`Tree::write` says so): a zero inertia under a mass turns any torque
-/// into an unbounded spin.
-fn inertia_of(i: &read::Inertial) -> Matrix3<f64> {
+/// failing that a solid ball's of radius [`BALL`] and the link's mass: a
+/// zero inertia under a mass turns any torque into an unbounded spin.
+/// With it, what was taken instead of the file's, for `Tree::write` to say.
+fn inertia_of(i: &read::Inertial) -> (Matrix3<f64>, Option<&'static str>) {
     let [xx, yy, zz, xy, xz, yz] = i.inertia;
     let full = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
     if positive_definite(&full) {
-        return full;
+        return (full, None);
     }
-    let diagonal = Matrix3::from_diagonal(&nalgebra::Vector3::new(xx, yy, zz));
+    let diagonal = Matrix3::from_diagonal(&Vector3::new(xx, yy, zz));
     if positive_definite(&diagonal) {
-        return diagonal;
+        return (diagonal, Some("its diagonal (as PyBullet reads it)"));
     }
-    Matrix3::identity() * (0.4 * i.mass * BALL * BALL)
+    (
+        Matrix3::identity() * (0.4 * i.mass * BALL * BALL),
+        Some("a solid ball's of radius 5 cm"),
+    )
 }
 
 /// Whether a symmetric matrix is positive definite (its Cholesky factor

@@ -126,14 +126,19 @@ impl Scene {
         } else {
             MAX_FEATURES
         };
-        let most = self
-            .bodies
+        let most = self.most_shapes();
+        per_pair * most * most
+    }
+
+    /// The most shapes a body has, at least 1 (the engine's
+    /// `Model::shape_slots`).
+    pub fn most_shapes(&self) -> usize {
+        self.bodies
             .iter()
             .map(|b| b.shapes().len())
             .max()
             .unwrap_or(1)
-            .max(1);
-        per_pair * most * most
+            .max(1)
     }
 }
 
