@@ -14,7 +14,9 @@ python3 -m pip download -q --no-deps example-robot-data==6.0.0 -d "$work" >/dev/
 robots="$work/x/cmeel.prefix/share/example-robot-data/robots"
 export ROS_PACKAGE_PATH="$robots"
 cargo build --release -q -p cosim-server
-bin=target/release/cosim-server
+# A copy, so that a build during the run does not change what runs.
+cp target/release/cosim-server "$work/"
+bin=$work/cosim-server
 out=bench/results/urdf-corpus.md
 {
     echo "# example-robot-data 6.0.0 at the defaults"

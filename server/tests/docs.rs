@@ -109,4 +109,17 @@ fn the_scene_file_in_the_docs_reads() {
     let scene =
         cosim_shared::Scene::parse(block, "docs/scenes.md").unwrap_or_else(|e| panic!("{e}"));
     assert!(scene.bodies.iter().any(|b| b.shape.len() == 2), "the table");
+    // The `[[robot]]` block, added to it, places the arm as written (its
+    // file relative to examples/scenes/).
+    let at = text.find("```toml\n[[robot]]").expect("the robot block") + "```toml\n".len();
+    let robot = &text[at..at + text[at..].find("```").expect("its end")];
+    let with = cosim_shared::Scene::read(&format!("{block}\n{robot}"), "docs/scenes.md")
+        .unwrap_or_else(|e| panic!("{e}"));
+    let placed =
+        cosim_import::scene::place(with, Some(&root.join("examples/scenes")), "docs/scenes.md")
+            .unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        placed.scene.bodies.iter().any(|b| b.name == "right/upper"),
+        "the arm placed"
+    );
 }

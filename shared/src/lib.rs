@@ -23,7 +23,7 @@ pub fn num(x: f64) -> String {
 pub const STATES_HEADER: &str = "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz";
 /// Header of `joints.csv`, written by the same three: each joint's state
 /// beside each state's body rows. `position` and `rate` are a hinge's
-/// angle (rad, in (-pi, pi], zero at t = 0) and angular rate (rad/s) or a
+/// angle (rad, in (-pi, pi], the joint's `position` at t = 0) and angular rate (rad/s) or a
 /// slider's offset (m) and speed (m/s), body b relative to body a about
 /// or along the axis; empty for spherical and fixed joints. `anchor_error`
 /// (m) and `angle_error` (rad) are what the joint's rows hold to zero
@@ -34,6 +34,7 @@ pub const IMPULSES_HEADER: &str = "step,t,kind,name,body_a,body_b,px,py,pz";
 
 pub use scene::{
     contact_label, BodyDesc, CameraDesc, FrictionCone, JointDesc, JointKind, PgsDesc, PgsStop,
-    PlacedShape, PlaneDesc, PositionUpdate, Scene, SceneError, ShapeDesc, ShapeEntry, SimDesc,
-    SleepDesc, SolverChoice, DEFAULT_PGS_MAX_ITERATIONS, DEFAULT_PGS_TOLERANCE, MAX_FEATURES,
+    PlacedShape, PlaneDesc, PositionUpdate, RobotDesc, Scene, SceneError, ShapeDesc, ShapeEntry,
+    SimDesc, SleepDesc, SolverChoice, DEFAULT_PGS_MAX_ITERATIONS, DEFAULT_PGS_TOLERANCE,
+    MAX_FEATURES, WORLD,
 };

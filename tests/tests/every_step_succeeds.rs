@@ -9,7 +9,7 @@ use cosim_server::engine::{Engine, LadderCounts, Model, Turning};
 use cosim_shared::{Scene, SolverChoice};
 use cosim_tests::shipped_scene;
 
-const SHIPPED: [&str; 12] = [
+const SHIPPED: [&str; 13] = [
     "reference.toml",
     "friction.toml",
     "frictionless.toml",
@@ -22,13 +22,23 @@ const SHIPPED: [&str; 12] = [
     "arm.toml",
     "shapes.toml",
     "push.toml",
+    "arms.toml",
 ];
+
+/// A shipped scene with its robots placed, as `cosim-server run` reads it.
+fn shipped(name: &str) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../examples/scenes")
+        .join(name);
+    cosim_import::scene::load(&path)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .scene
+}
 
 /// Steps `steps` times; panics on a failed step or, with Lemke asked for,
 /// a step solved by anything else. Returns the ladder's counts.
-fn run_all(text: &str, name: &str, solver: SolverChoice, steps: u64) -> LadderCounts {
-    let scene = Scene::parse(text, name).unwrap_or_else(|e| panic!("{e}"));
-    let mut model = Model::from_scene(&scene);
+fn run_all(scene: &Scene, name: &str, solver: SolverChoice, steps: u64) -> LadderCounts {
+    let mut model = Model::from_scene(scene);
     model.params.solver = solver;
     let mut engine = Engine::new(model);
     let mut ladder = LadderCounts::default();
@@ -72,11 +82,10 @@ fn the_list_holds_every_shipped_scene() {
 #[test]
 fn every_shipped_scene_runs_ten_times_its_duration_with_each_solver() {
     for name in SHIPPED {
-        let text = shipped_scene(name);
-        let scene = Scene::parse(&text, name).unwrap_or_else(|e| panic!("{e}"));
+        let scene = shipped(name);
         let steps = 10 * scene.step_count();
         for solver in [SolverChoice::Lemke, SolverChoice::Pgs, SolverChoice::Auto] {
-            let ladder = run_all(&text, name, solver, steps);
+            let ladder = run_all(&scene, name, solver, steps);
             eprintln!(
                 "{name} x10 ({steps} steps), {}: {}",
                 solver.as_str(),
@@ -92,7 +101,7 @@ fn every_shipped_scene_runs_ten_times_its_duration_with_each_solver() {
 #[test]
 fn the_reference_scene_runs_a_million_steps_with_lemke_alone() {
     let ladder = run_all(
-        &shipped_scene("reference.toml"),
+        &shipped("reference.toml"),
         "reference.toml",
         SolverChoice::Lemke,
         1_000_000,

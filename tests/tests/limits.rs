@@ -171,9 +171,74 @@ fn a_limit_between_two_bodies_keeps_the_momenta() {
     assert!(k_prev < k0, "the hit took no energy: {k_prev} J of {k0} J");
 }
 
+/// A hinge may start away from its zero (`position`, MuJoCo's `qpos0`):
+/// the level pendulum started with the coordinate at 0.3 rad reads 0.3 at
+/// t = 0, its coordinate stays the bob's angle below the level plus 0.3
+/// (to the joint's drift), and it reaches its upper limit at 0.5 rad
+/// after falling 0.2 rad, not 0.5: sooner than the same pendulum from 0.
+#[test]
+fn a_hinge_starts_at_its_initial_position_and_its_limit_counts_from_zero() {
+    let (h, steps) = (1e-3, 2000u64);
+    let hit_of = |extra: &str| {
+        let mut e = level_pendulum(h, steps, [0.0, 0.0, -G], 0.0, extra);
+        let start = coord(&e).0;
+        let (mut hit, mut off) = (None, 0.0f64);
+        run(&mut e, steps, |e, r| {
+            let (x, _) = coord(e);
+            let p = e.state().bodies[0].x;
+            // About +y, +x turns towards -z.
+            let below = (-(p.z - 1.0)).atan2(p.x);
+            off = off.max((x - below - start).abs());
+            if hit.is_none() && x > 0.5 - 1e-6 {
+                hit = Some(r.step);
+            }
+        });
+        (start, hit.expect("reached the limit"), off)
+    };
+    let (start, hit, off) = hit_of("range = [-1.0, 0.5]\nposition = 0.3\n");
+    assert!(
+        (start - 0.3).abs() < 1e-12,
+        "the coordinate at t = 0: {start}"
+    );
+    assert!(
+        off < 1e-6,
+        "the coordinate strays {off} rad from the bob's angle"
+    );
+    // theta'' = (g / l) cos theta from level: 0.2 rad in about
+    // sqrt(2 0.2 / 19.6) = 0.14 s.
+    assert!((130..160).contains(&hit), "reached the limit at step {hit}");
+    let (_, hit0, _) = hit_of("range = [-1.0, 0.5]\n");
+    assert!(hit < hit0, "from 0.3 at step {hit}, from 0 at step {hit0}");
+}
+
+/// A slider started at 0.1 m (`position`) reads 0.1 at t = 0, the car's
+/// travel plus 0.1 after, and its upper limit at 0.3 m stops the car
+/// 0.2 m from where it started.
+#[test]
+fn a_slider_starts_at_its_initial_position() {
+    let (h, steps, f) = (1e-3, 1000u64, 2.0);
+    let mut e = rail_car(
+        h,
+        steps,
+        &format!("force = [{f:e}, 0.0, 0.0]\nrange = [-0.2, 0.3]\nposition = 0.1\n"),
+    );
+    assert!(
+        (coord(&e).0 - 0.1).abs() < 1e-12,
+        "starts at {}",
+        coord(&e).0
+    );
+    let mut off = 0.0f64;
+    run(&mut e, steps, |e, _| {
+        off = off.max((coord(e).0 - e.state().bodies[0].x.x - 0.1).abs())
+    });
+    assert!(off < 1e-9, "the coordinate strays {off} m from the travel");
+    let x = e.state().bodies[0].x.x;
+    assert!((x - 0.2).abs() < TOL * steps as f64 * h, "stopped at {x} m");
+}
+
 /// A range is checked like the rest of a joint, each fault named: bounds
 /// out of order or not finite, a hinge's beyond pi, a range on a joint
-/// without a coordinate, a restitution without a range or outside [0, 1].
+/// without a coordinate, an initial position outside the range, a restitution without a range or outside [0, 1].
 #[test]
 fn a_joints_range_is_checked_and_named() {
     let base =
@@ -198,6 +263,18 @@ fn a_joints_range_is_checked_and_named() {
         (
             with("spherical", None, "range = [-1.0, 1.0]"),
             "joint \"h\".range: only a revolute or prismatic joint has a range",
+        ),
+        (
+            with("revolute", y, "range = [-1.0, 1.0]\nposition = 1.5"),
+            "joint \"h\".position = 1.5: must be finite and within [-1, 1]",
+        ),
+        (
+            with("revolute", y, "position = 4.0"),
+            "joint \"h\".position = 4: must be finite and within [-3.14",
+        ),
+        (
+            with("spherical", None, "position = 0.1"),
+            "joint \"h\".position: only a revolute or prismatic joint has a coordinate",
         ),
         (
             with("revolute", y, "limit_restitution = 0.5"),

@@ -13,6 +13,18 @@ fn arm_text() -> String {
     std::fs::read_to_string(path).expect("examples/urdf/arm.urdf")
 }
 
+/// An arm's text imported with the default options, with its notes.
+fn import_arm(text: &str) -> cosim_import::urdf::Imported {
+    cosim_import::urdf::import(
+        text,
+        "arm.urdf",
+        "arm",
+        None,
+        cosim_import::urdf::Options::default(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
+}
+
 fn import(text: &str) -> Result<Scene, cosim_shared::SceneError> {
     cosim_import::urdf::scene(text, "robot.urdf", "robot")
 }
@@ -329,14 +341,7 @@ fn joints_dynamics_and_massless_links() {
             r#"<limit lower="-2.5" upper="2.5" effort="8" velocity="3"/><dynamics damping="0.1" friction="0.2"/><mimic joint="shoulder"/>"#,
         )
         .replace(r#"name="shoulder" type="revolute""#, r#"name="shoulder" type="spherical""#);
-    let imported = cosim_import::urdf::import(
-        &text,
-        "arm.urdf",
-        "arm",
-        None,
-        cosim_import::urdf::Options::default(),
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+    let imported = import_arm(&text);
     let j = &imported.scene.joints;
     assert_eq!(j[1].kind, cosim_shared::JointKind::Spherical);
     let m = j[2].motor.expect("friction");
@@ -350,6 +355,52 @@ fn joints_dynamics_and_massless_links() {
         notes.contains("joint \"elbow\": <mimic joint=\"shoulder\">"),
         "{notes}"
     );
+}
+
+/// A joint whose zero lies outside its limits starts at the nearer limit
+/// (issue 45 point 5; iCub's elbows and the Unitree calves are so
+/// written): the elbow limited to [0.5, 2.0] rad stands at 0.5, the
+/// forearm turned by it about y, and the scene says `position = 0.5`; the
+/// coordinate reads 0.5 at t = 0 and never leaves the range, and no step
+/// gains energy beyond the step's first-order swing (before, the limit
+/// yanked the joint into range in the first step).
+#[test]
+fn a_joint_whose_zero_is_outside_its_limits_starts_at_the_nearer_limit() {
+    let text = arm_text().replace(
+        r#"<limit lower="-2.5" upper="2.5" effort="8" velocity="3"/>"#,
+        r#"<limit lower="0.5" upper="2.0" effort="8" velocity="3"/>"#,
+    );
+    let imported = import_arm(&text);
+    let notes = imported.notes.join("\n");
+    assert!(
+        notes.contains("joint \"elbow\": its zero lies outside its limits: it starts at 0.5"),
+        "{notes}"
+    );
+    assert_eq!(imported.scene.joints[2].position, Some(0.5));
+    let model = Model::from_scene(&imported.scene);
+    // Ry(0.5) takes the forearm's x towards -z.
+    let fore = Vector3::new(0.4 + 0.15 * 0.5f64.cos(), 0.0, 0.5 - 0.15 * 0.5f64.sin());
+    let at = model.initial[2].position;
+    assert!((at - fore).norm() < 1e-12, "the forearm at {at:?}");
+    let mut e = Engine::new(model);
+    let elbow = |e: &Engine| coordinate(&e.model().joints[2], e.state()).expect("a hinge");
+    assert!((elbow(&e).0 - 0.5).abs() < 1e-12, "{:?}", elbow(&e));
+    let energy0 = cosim_server::engine::measure::energy(e.model(), e.state()).total;
+    let mut gain = f64::NEG_INFINITY;
+    for k in 0..1000 {
+        let r = e.step();
+        assert!(r.error.is_none(), "{:?}", r.error);
+        gain = gain.max(r.energy.total - energy0);
+        let (q, _) = elbow(&e);
+        assert!(
+            (0.5 - 1e-3..=2.0 + 1e-3).contains(&q),
+            "step {k}: elbow at {q}"
+        );
+    }
+    // The first-order step's energy swings by O(h) of the motion's (7.6e-3
+    // J below the start mid-swing here); measured 1.5e-4 J above it at
+    // most.
+    assert!(gain < 1e-3, "a step gained {gain} J over the start");
 }
 
 /// A collision mesh (an STL and an OBJ written here, as robot packages
@@ -460,4 +511,133 @@ fn a_robots_links_touch_each_other_only_when_asked() {
         let (a, c) = (0, 2);
         assert_eq!(model.may_touch(a, c), touching);
     }
+}
+
+/// The shipped `arms.toml` places examples/urdf/arm.urdf twice (issue 45,
+/// point 5): each robot's bodies and joints named `robot/...`, set at the
+/// robot's pose (right: turned half a turn about z), its links a group of
+/// their own, the right arm's joints at their initial coordinates, the
+/// table and box beside them; the scene written out (`scene.toml` of a
+/// run) reads back as the same scene without its robots' files.
+#[test]
+fn a_scene_places_two_robots_at_their_poses_and_joint_positions() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/scenes/arms.toml");
+    let imported = cosim_import::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let scene = &imported.scene;
+    let names: Vec<&str> = scene.bodies.iter().map(|b| b.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "table",
+            "box",
+            "left/base",
+            "left/upper",
+            "left/fore",
+            "right/base",
+            "right/upper",
+            "right/fore"
+        ]
+    );
+    let joints: Vec<&str> = scene.joints.iter().map(|j| j.name.as_str()).collect();
+    assert_eq!(
+        joints,
+        [
+            "left/mount",
+            "left/shoulder",
+            "left/elbow",
+            "right/mount",
+            "right/shoulder",
+            "right/elbow"
+        ]
+    );
+    assert!(scene.robots.is_empty());
+    let body = |n: &str| scene.bodies.iter().find(|b| b.name == n).expect(n);
+    assert_eq!(body("left/upper").group.as_deref(), Some("left"));
+    assert_eq!(body("right/fore").group.as_deref(), Some("right"));
+    assert_eq!(body("table").group, None);
+    // The left arm's base at its file's (0, 0, 0.5) moved by (-0.6, -0.15, 0).
+    let p = body("left/base").position;
+    assert!(
+        (Vector3::from(p) - Vector3::new(-0.6, -0.15, 0.5)).norm() < 1e-12,
+        "{p:?}"
+    );
+    // The right shoulder at (0.6, 0.15, 0) + Rz(pi) (0.1, 0, 0.5), its axis
+    // y turned to -y.
+    let shoulder = scene
+        .joints
+        .iter()
+        .find(|j| j.name == "right/shoulder")
+        .expect("shoulder");
+    assert!((Vector3::from(shoulder.anchor) - Vector3::new(0.5, 0.15, 0.5)).norm() < 1e-12);
+    let axis = Vector3::from(shoulder.axis.expect("a hinge"));
+    assert!((axis + Vector3::y()).norm() < 1e-12, "{axis:?}");
+    assert_eq!(shoulder.position, Some(-0.4));
+    let model = Model::from_scene(scene);
+    let e = Engine::new(model);
+    let q = |n: &str| {
+        let j = e.model().joints.iter().find(|j| j.name == n).expect(n);
+        coordinate(j, e.state()).expect("a hinge").0
+    };
+    assert!((q("right/shoulder") + 0.4).abs() < 1e-12);
+    assert!((q("right/elbow") - 0.6).abs() < 1e-12);
+    assert!(q("left/elbow").abs() < 1e-12);
+    // The right upper arm raised: its centre 0.15 m out along the arm
+    // turned up by 0.4 rad (a negative turn about y raises +x).
+    let upper = body("right/upper").position;
+    let expect = Vector3::new(0.5 - 0.15 * 0.4f64.cos(), 0.15, 0.5 + 0.15 * 0.4f64.sin());
+    assert!((Vector3::from(upper) - expect).norm() < 1e-12, "{upper:?}");
+    let again = Scene::parse(&scene.to_toml(), "scene.toml").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(&again, scene);
+}
+
+/// A scene's robot problems are said at once, naming each robot: two
+/// robots of one name, a joint position for a joint the robot lacks,
+/// one outside its limits, a file that is not there; and a scene with a
+/// robot read without the importer says where robots are placed.
+#[test]
+fn a_scenes_robot_problems_are_said_at_once() {
+    let dir = std::env::temp_dir().join(format!("cosim-robot-scene-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("arm.urdf"), arm_text()).unwrap();
+    let text = r#"
+[sim]
+dt = 0.001
+duration = 1.0
+
+[[robot]]
+file = "arm.urdf"
+joints = { wrist = 0.1, elbow = 3.0 }
+
+[[robot]]
+file = "arm.urdf"
+
+[[robot]]
+file = "gone.urdf"
+name = "gone"
+"#;
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    let e = cosim_import::scene::load(&path)
+        .expect_err("refused")
+        .to_string();
+    std::fs::remove_dir_all(&dir).ok();
+    for expect in [
+        "3 problems",
+        "robot[0] \"arm\": ",
+        "joint \"wrist\": given an initial position, but the robot has no such joint",
+        "joint \"elbow\": the initial position 3 lies outside its limits [-2.5, 2.5]",
+        "robot[1] \"arm\": a second robot of this name",
+        "robot[2] \"gone\": ",
+        "cannot read the file",
+    ] {
+        assert!(e.contains(expect), "{expect:?} not in: {e}");
+    }
+    let e = Scene::parse(text, "scene.toml")
+        .expect_err("refused")
+        .to_string();
+    assert!(
+        e.contains("robot = \"arm.urdf\": a robot is placed by the importer"),
+        "{e}"
+    );
 }

@@ -14,7 +14,7 @@ pub use params::{Compliance, Params, PgsParams, Skips, Sleep, Stop};
 pub use state::{BodyState, State, WarmContact, WarmCursor};
 
 use cosim_shared::Scene;
-use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Unit, UnitQuaternion, Vector3};
 
 /// A body's shape in its own frame, centred on the centre of mass.
 /// Another shape is a new variant, an inertia below and a file per shape
@@ -582,11 +582,20 @@ impl Model {
                     K::Spherical => Turning::Free,
                     K::Revolute => {
                         let zero = kinematics::perpendicular(&axis);
+                        // B stands turned by its initial coordinate: its
+                        // zero direction is A's turned as far.
+                        let zero_b = match j.position {
+                            Some(q) if q != 0.0 => {
+                                UnitQuaternion::from_axis_angle(&Unit::new_normalize(axis), q)
+                                    * zero
+                            }
+                            _ => zero,
+                        };
                         Turning::Axis {
                             a: turned(a).inverse_transform_vector(&axis),
                             b: turned(b).inverse_transform_vector(&axis),
                             zero_a: turned(a).inverse_transform_vector(&zero),
-                            zero_b: turned(b).inverse_transform_vector(&zero),
+                            zero_b: turned(b).inverse_transform_vector(&zero_b),
                         }
                     }
                     K::Fixed | K::Prismatic => locked,
@@ -598,7 +607,12 @@ impl Model {
                     a,
                     b,
                     local_a: local(a, anchor),
-                    local_b: local(b, anchor),
+                    // A slider's B anchor lies its initial coordinate
+                    // along the axis from A's.
+                    local_b: match (j.kind, j.position) {
+                        (K::Prismatic, Some(q)) if q != 0.0 => local(b, anchor + q * axis),
+                        _ => local(b, anchor),
+                    },
                     effort: v3(j.force.unwrap_or(j.torque)),
                     turning,
                     slide,

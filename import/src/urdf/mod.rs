@@ -40,11 +40,12 @@ pub use read::{Geometry, JointType, Robot};
 use crate::problems::Problems;
 use cosim_shared::{Scene, SceneError};
 use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
 /// What the importer adds that the file does not say.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct Options {
     /// Weld a root with mass to the world (a fixed-base arm described
     /// without a `world` link). Default: it floats.
@@ -54,6 +55,9 @@ pub struct Options {
     /// The robot's links touch each other (but a joint's two links).
     /// Default: they do not, as in PyBullet unless asked.
     pub self_collision: bool,
+    /// Initial coordinates of joints by name (rad or m); the others start
+    /// at zero, or at the nearer limit where the limits exclude it.
+    pub positions: BTreeMap<String, f64>,
 }
 
 /// A scene read from a URDF, and what the reading has to say about it.
@@ -86,7 +90,8 @@ pub fn import(
     let mut problems = Problems::new(file);
     let robot = read::robot(text, &mut problems);
     let mut notes = Vec::new();
-    let tree = Tree::new(&robot, &mut problems);
+    let start = starts(&robot, &options.positions, &mut problems);
+    let tree = Tree::new(&robot, &start, &mut problems);
     let mut s = format!(
         "[sim]\nname = {name:?}\ndt = 0.001\nduration = 3.0\ngravity = [0.0, 0.0, -9.81]\nfriction_directions = 8\n\n"
     );
@@ -95,7 +100,7 @@ pub fn import(
         tree.write(
             &robot,
             dir,
-            options,
+            &options,
             &mut s,
             &mut problems,
             &mut notes,
@@ -141,6 +146,8 @@ struct Tree {
     parent_joint: Vec<Option<usize>>,
     /// Per joint, its parent and child links (`None`: no such link, said).
     ends: Vec<(Option<usize>, Option<usize>)>,
+    /// Per joint, its coordinate in the frames above.
+    start: Vec<f64>,
 }
 
 fn v3(v: &Vector3<f64>) -> String {
@@ -152,7 +159,8 @@ fn quat(q: &UnitQuaternion<f64>) -> String {
 }
 
 impl Tree {
-    fn new(robot: &read::Robot, problems: &mut Problems) -> Option<Tree> {
+    /// The tree with each joint `k` at coordinate `start[k]`.
+    fn new(robot: &read::Robot, start: &[f64], problems: &mut Problems) -> Option<Tree> {
         let n = robot.links.len();
         if n == 0 {
             if problems.list.is_empty() {
@@ -237,17 +245,18 @@ impl Tree {
         while k < order.len() {
             let l = order[k];
             k += 1;
-            for (j, &(_, c)) in robot
+            for ((j, &(_, c)), &q) in robot
                 .joints
                 .iter()
                 .zip(&ends)
-                .filter(|(_, e)| e.0 == Some(l))
+                .zip(start)
+                .filter(|((_, e), _)| e.0 == Some(l))
             {
                 let Some(c) = c else { continue };
                 if frame[c].is_some() {
                     continue;
                 }
-                frame[c] = frame[l].map(|t| t * j.origin);
+                frame[c] = frame[l].map(|t| t * j.origin * motion(j, q));
                 // A fixed joint merges its child into its parent's body,
                 // but for the world's: each link fixed to the world is a
                 // body welded to it.
@@ -292,6 +301,7 @@ impl Tree {
             world_root,
             parent_joint,
             ends,
+            start: start.to_vec(),
         })
     }
 
@@ -322,7 +332,7 @@ impl Tree {
         &self,
         robot: &read::Robot,
         dir: Option<&Path>,
-        options: Options,
+        options: &Options,
         s: &mut String,
         problems: &mut Problems,
         notes: &mut Vec<String>,
@@ -356,7 +366,7 @@ impl Tree {
                 };
                 if let (_, Some(instead)) = inertia_of(i) {
                     notes.push(format!(
-                        "link {:?}: its inertia {:?} is not positive definite: {instead} taken",
+                        "link {:?}: its inertia {:?} is not positive definite or has a moment under 1e-12 kg m^2: {instead} taken",
                         links[l].name, i.inertia,
                     ));
                 }
@@ -443,7 +453,7 @@ impl Tree {
             let name = &body_name[self.group[l]];
             (!name.is_empty()).then_some(name.as_str())
         };
-        for (j, &ends) in robot.joints.iter().zip(&self.ends) {
+        for (k, (j, &ends)) in robot.joints.iter().zip(&self.ends).enumerate() {
             let what = format!("joint {:?}", j.name);
             let (Some(p), Some(c)) = ends else {
                 continue;
@@ -500,36 +510,26 @@ impl Tree {
             if hinge_or_slider {
                 let _ = writeln!(s, "axis = {}", v3(&(at.rotation * j.axis.normalize())));
             }
-            if let (JointType::Revolute | JointType::Prismatic, Some(lo), Some(hi)) =
-                (j.kind, j.lower, j.upper)
-            {
-                // PyBullet's rule: lower > upper is no limit; so is a
-                // hinge's range of a full turn or more.
-                use std::f64::consts::PI;
-                let full = j.kind == JointType::Revolute && hi - lo >= 2.0 * PI;
-                // A hinge's coordinate lies in [-pi, pi] here: a limit
-                // beyond is held at pi, and said.
-                let (lo, hi) = if j.kind == JointType::Revolute && (lo < -PI || hi > PI) && !full {
+            if let Some((lo, hi)) = range_of(j) {
+                if (j.lower, j.upper) != (Some(lo), Some(hi)) {
                     notes.push(format!(
-                        "joint {:?}: its limits [{lo}, {hi}] rad are held within [-pi, pi]",
+                        "joint {:?}: its limits [{}, {}] rad are held within [-pi, pi]",
+                        j.name,
+                        j.lower.unwrap_or(lo),
+                        j.upper.unwrap_or(hi)
+                    ));
+                }
+                let _ = writeln!(s, "range = [{lo:?}, {hi:?}]");
+            }
+            let q = self.start[k];
+            if q != 0.0 {
+                if !options.positions.contains_key(&j.name) {
+                    notes.push(format!(
+                        "joint {:?}: its zero lies outside its limits: it starts at {q}",
                         j.name
                     ));
-                    (lo.max(-PI), hi.min(PI))
-                } else {
-                    (lo, hi)
-                };
-                if lo < hi && !full {
-                    if !(lo..=hi).contains(&0.0) {
-                        // The file's zero pose is the scene's start: the
-                        // limit pulls the joint into range in one step.
-                        notes.push(format!(
-                            "joint {:?}: its zero lies outside its limits [{lo}, {hi}]: the first step \
-                             pulls it into range (initial joint positions are not read yet)",
-                            j.name
-                        ));
-                    }
-                    let _ = writeln!(s, "range = [{lo:?}, {hi:?}]");
                 }
+                let _ = writeln!(s, "position = {q:?}");
             }
             if j.friction > 0.0 && matches!(kind, "revolute" | "prismatic") {
                 let _ = writeln!(
@@ -552,6 +552,125 @@ impl Tree {
             }
             s.push('\n');
         }
+    }
+}
+
+/// The limits a hinge's or slider's coordinate is held within, if any.
+/// PyBullet's rule: lower > upper is no limit; so is a hinge's range of a
+/// full turn or more. A hinge's coordinate lies in [-pi, pi] here: a
+/// limit beyond is held at pi (the caller says so).
+fn range_of(j: &read::Joint) -> Option<(f64, f64)> {
+    use std::f64::consts::PI;
+    let (JointType::Revolute | JointType::Prismatic, Some(lo), Some(hi)) =
+        (j.kind, j.lower, j.upper)
+    else {
+        return None;
+    };
+    if j.kind == JointType::Prismatic {
+        return (lo < hi).then_some((lo, hi));
+    }
+    let (lo, hi) = (lo.max(-PI), hi.min(PI));
+    (lo < hi && j.upper? - j.lower? < 2.0 * PI).then_some((lo, hi))
+}
+
+/// Each joint's initial coordinate: the one `positions` gives it, else
+/// `start_of`'s. A named joint that is not one, or cannot move, or a
+/// coordinate outside the joint's limits, is a problem.
+fn starts(
+    robot: &read::Robot,
+    positions: &BTreeMap<String, f64>,
+    problems: &mut Problems,
+) -> Vec<f64> {
+    for name in positions.keys() {
+        if !robot.joints.iter().any(|j| &j.name == name) {
+            let known: Vec<&str> = robot
+                .joints
+                .iter()
+                .filter(|j| moves(j))
+                .map(|j| j.name.as_str())
+                .collect();
+            problems.add(
+                0,
+                format!("joint {name:?}"),
+                format!("given an initial position, but the robot has no such joint (its joints: {known:?})"),
+            );
+        }
+    }
+    robot
+        .joints
+        .iter()
+        .map(|j| {
+            let Some(&q) = positions.get(&j.name) else {
+                return start_of(j);
+            };
+            let what = format!("joint {:?}", j.name);
+            if !moves(j) {
+                problems.add(
+                    j.line,
+                    what,
+                    "given an initial position, but it is not a hinge or slider",
+                );
+                return 0.0;
+            }
+            // A continuous joint's angle is read on the circle.
+            let q = if j.kind == JointType::Continuous {
+                (q + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+            } else {
+                q
+            };
+            match range_of(j) {
+                Some((lo, hi)) if !(lo..=hi).contains(&q) => {
+                    problems.add(
+                        j.line,
+                        what,
+                        format!("the initial position {q} lies outside its limits [{lo}, {hi}]"),
+                    );
+                    0.0f64.clamp(lo, hi)
+                }
+                _ if !q.is_finite()
+                    || (j.kind == JointType::Revolute && q.abs() > std::f64::consts::PI) =>
+                {
+                    problems.add(
+                        j.line,
+                        what,
+                        format!("the initial position {q} is not an angle within [-pi, pi]"),
+                    );
+                    0.0
+                }
+                _ => q,
+            }
+        })
+        .collect()
+}
+
+/// Whether a joint has a coordinate (a hinge or a slider).
+fn moves(j: &read::Joint) -> bool {
+    matches!(
+        j.kind,
+        JointType::Revolute | JointType::Continuous | JointType::Prismatic
+    )
+}
+
+/// Where a joint starts: at its zero, or where its limits exclude it at
+/// the nearer limit (MuJoCo clamps `qpos0` into range the same way when
+/// it simulates, and PyBullet's first step pulls the joint there).
+fn start_of(j: &read::Joint) -> f64 {
+    range_of(j).map_or(0.0, |(lo, hi)| 0.0f64.clamp(lo, hi))
+}
+
+/// The child's frame in the joint's as the joint stands at `q`: turned
+/// about the axis (hinge) or moved along it (slider).
+fn motion(j: &read::Joint, q: f64) -> Isometry3<f64> {
+    if q == 0.0 || j.axis.norm() <= 1e-12 {
+        return Isometry3::identity();
+    }
+    let axis = nalgebra::Unit::new_normalize(j.axis);
+    match j.kind {
+        JointType::Prismatic => Isometry3::translation(q * axis.x, q * axis.y, q * axis.z),
+        _ => Isometry3::from_parts(
+            Default::default(),
+            UnitQuaternion::from_axis_angle(&axis, q),
+        ),
     }
 }
 
@@ -704,25 +823,38 @@ impl Mass {
 /// none given takes (icub's links carry zeros).
 const BALL: f64 = 0.05;
 
+// Below `MIN_MOMENT` (the scene's least principal moment) an inertia is
+// taken as missing: iCub's `r_ankle_1` carries 1e-20 kg m^2 under 0.75
+// kg, whose inverse swamps the joints' rows so that the solver holds none
+// of them. MuJoCo refuses moments below its mjMINVAL (1e-15).
+use cosim_shared::scene::MIN_MOMENT;
+
 /// A link's inertia matrix as written; where it is not positive definite
-/// (files carry such), its diagonal, as PyBullet reads every inertia, or
-/// failing that a solid ball's of radius [`BALL`] and the link's mass: a
-/// zero inertia under a mass turns any torque into an unbounded spin.
-/// With it, what was taken instead of the file's, for `Tree::write` to say.
+/// or has a moment below [`MIN_MOMENT`] (files carry such), its diagonal,
+/// as PyBullet reads every inertia, or failing that a solid ball's of
+/// radius [`BALL`] and the link's mass: a zero inertia under a mass turns
+/// any torque into an unbounded spin. With it, what was taken instead of
+/// the file's, for `Tree::write` to say.
 fn inertia_of(i: &read::Inertial) -> (Matrix3<f64>, Option<&'static str>) {
     let [xx, yy, zz, xy, xz, yz] = i.inertia;
     let full = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
-    if positive_definite(&full) {
+    if usable(&full) {
         return (full, None);
     }
     let diagonal = Matrix3::from_diagonal(&Vector3::new(xx, yy, zz));
-    if positive_definite(&diagonal) {
+    if usable(&diagonal) {
         return (diagonal, Some("its diagonal (as PyBullet reads it)"));
     }
     (
         Matrix3::identity() * (0.4 * i.mass * BALL * BALL),
         Some("a solid ball's of radius 5 cm"),
     )
+}
+
+/// Whether an inertia is positive definite with every principal moment at
+/// least [`MIN_MOMENT`].
+fn usable(m: &Matrix3<f64>) -> bool {
+    positive_definite(m) && m.symmetric_eigenvalues().min() >= MIN_MOMENT
 }
 
 /// Whether a symmetric matrix is positive definite (its Cholesky factor

@@ -14,14 +14,20 @@ use std::time::Instant;
 pub fn load(args: &RunArgs) -> Result<Scene, SceneError> {
     let mut scene = match &args.scene {
         // A URDF robot (`.urdf`) is read as a scene of its own
-        // (cosim_import::urdf); what it approximated or merged is said.
-        Some(path) if path.extension().is_some_and(|e| e == "urdf") => {
-            let options = cosim_import::urdf::Options {
-                fixed_base: args.robot.fixed_base,
-                floor: args.robot.floor,
-                self_collision: args.robot.self_collision,
+        // (cosim_import::urdf), a scene's `[[robot]]`s placed
+        // (cosim_import::scene); what they approximated or merged is said.
+        Some(path) => {
+            let imported = if path.extension().is_some_and(|e| e == "urdf") {
+                let options = cosim_import::urdf::Options {
+                    fixed_base: args.robot.fixed_base,
+                    floor: args.robot.floor,
+                    self_collision: args.robot.self_collision,
+                    ..Default::default()
+                };
+                cosim_import::urdf::load(path, options)?
+            } else {
+                cosim_import::scene::load(path)?
             };
-            let imported = cosim_import::urdf::load(path, options)?;
             if !args.quiet {
                 for note in &imported.notes {
                     eprintln!("note: {}: {note}", path.display());
@@ -29,7 +35,6 @@ pub fn load(args: &RunArgs) -> Result<Scene, SceneError> {
             }
             imported.scene
         }
-        Some(path) => Scene::load(path)?,
         None => cosim_shared::scenes::reference()?,
     };
     let file = args

@@ -223,7 +223,7 @@ impl BodyDesc {
     }
 }
 
-fn identity_quaternion() -> [f64; 4] {
+pub(super) fn identity_quaternion() -> [f64; 4] {
     [1.0, 0.0, 0.0, 0.0]
 }
 

@@ -53,11 +53,19 @@ pub struct JointDesc {
     /// nothing: the planes are not the world's body.
     #[serde(default = "default_true")]
     pub collide: bool,
+    /// `revolute` and `prismatic` only: the coordinate at t = 0 (rad or m;
+    /// default 0), as the bodies are placed: body_b stands turned by it
+    /// about the axis (hinge), or its anchor lies `position` along the axis
+    /// from `anchor` (slider), from where the coordinate is zero. Within
+    /// `range`; a hinge's within [-pi, pi] (MuJoCo's `qpos0`, a URDF
+    /// joint's zero beside its start).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<f64>,
     /// `revolute` and `prismatic` only: the coordinate's limits `[lower,
     /// upper]` (rad for a hinge, within [-pi, pi]; m for a slider), with
-    /// `lower < upper`; the coordinate is 0 at t = 0 (MuJoCo's `range`,
-    /// URDF's `<limit lower upper>`). Held by unilateral rows, each with
-    /// its own stabilisation, as contacts are.
+    /// `lower < upper` (MuJoCo's `range`, URDF's `<limit lower upper>`).
+    /// Held by unilateral rows, each with its own stabilisation, as
+    /// contacts are.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub range: Option<[f64; 2]>,
     /// Newton restitution of a limit hit, in [0, 1] (0: the coordinate

@@ -8,12 +8,15 @@
 mod body;
 pub mod hull;
 mod joint;
+mod robot;
 mod sim;
 mod validate;
 
 pub use body::*;
 pub use joint::*;
+pub use robot::*;
 pub use sim::*;
+pub use validate::MIN_MOMENT;
 
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -30,6 +33,11 @@ pub struct Scene {
     pub planes: Vec<PlaneDesc>,
     #[serde(default, rename = "joint")]
     pub joints: Vec<JointDesc>,
+    /// `[[robot]]`: robot files to place; the importer writes their bodies
+    /// and joints into the scene and empties this list (`Scene::parse`
+    /// refuses a scene that still has one).
+    #[serde(default, rename = "robot", skip_serializing_if = "Vec::is_empty")]
+    pub robots: Vec<RobotDesc>,
     /// The animation's camera; framed automatically when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub camera: Option<CameraDesc>,
@@ -92,9 +100,15 @@ impl Scene {
 
     /// Parses and validates scene text; `file` only labels the errors.
     pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
-        let scene: Scene = toml::from_str(text).map_err(|e| toml_error(&e, text, file))?;
+        let scene = Scene::read(text, file)?;
         scene.validate(file)?;
         Ok(scene)
+    }
+
+    /// Parses scene text without the checks, for a reader that completes
+    /// the scene first (`cosim_import::scene` places its robots).
+    pub fn read(text: &str, file: &str) -> Result<Scene, SceneError> {
+        toml::from_str(text).map_err(|e| toml_error(&e, text, file))
     }
 
     /// The scene's name, used for the output folder.

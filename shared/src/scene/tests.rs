@@ -68,3 +68,29 @@ fn unknown_field_is_named() {
     assert_eq!(e.location.map(|l| l.0), Some(10), "{e}");
     assert_eq!(e.field, "body[0].mas", "{e}");
 }
+
+/// The smallest principal moment: diag(1, 2, 3) turned 45 degrees about z
+/// has 1; iCub's `r_ankle_1` inertia (1e-20 under 0.75 kg), which makes
+/// the solver hold no joint, is refused by name.
+#[test]
+fn an_inertia_with_a_vanishing_moment_is_refused() {
+    let least = super::validate::smallest_moment([1.5, 1.5, 3.0, -0.5, 0.0, 0.0]);
+    assert!((least - 1.0).abs() < 1e-14, "{least}");
+    let least = super::validate::smallest_moment([2.0, 3.0, 1.0, 0.0, 0.0, 0.0]);
+    assert_eq!(least, 1.0);
+    let icub =
+        "inertia = [2.71051e-20, 5.42101e-20, 1.35525e-20, -1.69407e-21, 1.35525e-20, 3.38813e-21]";
+    let text = MINIMAL.replace("mass = 1.0", &format!("mass = 0.746\n{icub}"));
+    let e = Scene::parse(&text, "t.toml")
+        .expect_err("refused")
+        .to_string();
+    assert!(
+        e.contains("body \"ball\".inertia") && e.contains("smallest principal moment"),
+        "{e}"
+    );
+    let fine = MINIMAL.replace(
+        "mass = 1.0",
+        "mass = 0.001\ninertia = [1e-8, 1e-8, 1e-8, 0.0, 0.0, 0.0]",
+    );
+    Scene::parse(&fine, "t.toml").expect("a 1 g part's inertia");
+}

@@ -10,6 +10,16 @@ impl Scene {
             field,
             message,
         };
+        if let Some(r) = self.robots.first() {
+            return Err(err(
+                "robot".into(),
+                format!(
+                    "= {:?}: a robot is placed by the importer: run the scene with cosim-server \
+                     (or read it with cosim_import::scene::load)",
+                    r.file
+                ),
+            ));
+        }
         let sim = &self.sim;
         positive(sim.dt).map_err(|m| err("sim.dt".into(), m))?;
         match (sim.duration, sim.steps) {
@@ -152,6 +162,17 @@ impl Scene {
                         ),
                     ));
                 }
+                let least = smallest_moment(j);
+                if least < MIN_MOMENT {
+                    return Err(err(
+                        f("inertia"),
+                        format!(
+                            "= {j:?}: its smallest principal moment {least:e} kg m^2 is under \
+                             {MIN_MOMENT:e}: its inverse would swamp every other row of the step \
+                             (a 1 g part 5 mm across has 1e-8)"
+                        ),
+                    ));
+                }
             }
             finite3(&b.position).map_err(|m| err(f("position"), m))?;
             finite3(&b.velocity).map_err(|m| err(f("velocity"), m))?;
@@ -253,6 +274,29 @@ impl Scene {
                 }
                 (_, None) => {}
             }
+            if let Some(q) = j.position {
+                if !matches!(j.kind, JointKind::Revolute | JointKind::Prismatic) {
+                    return Err(err(
+                        f("position"),
+                        format!(
+                            "only a revolute or prismatic joint has a coordinate (this one is {})",
+                            j.kind.as_str()
+                        ),
+                    ));
+                }
+                let pi = std::f64::consts::PI;
+                let (lo, hi) = match (j.kind, j.range) {
+                    (_, Some([lo, hi])) => (lo, hi),
+                    (JointKind::Revolute, None) => (-pi, pi),
+                    _ => (f64::NEG_INFINITY, f64::INFINITY),
+                };
+                if !(q.is_finite() && (lo..=hi).contains(&q)) {
+                    return Err(err(
+                        f("position"),
+                        format!("= {q}: must be finite and within [{lo}, {hi}]"),
+                    ));
+                }
+            }
             if let Some(motor) = j.motor {
                 if !matches!(j.kind, JointKind::Revolute | JointKind::Prismatic) {
                     return Err(err(
@@ -337,6 +381,26 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// The smallest principal moment of inertia a body may have (kg m^2).
+pub const MIN_MOMENT: f64 = 1e-12;
+
+/// The smallest eigenvalue of the symmetric inertia `[ixx, iyy, izz, ixy,
+/// ixz, iyz]` (the closed form for a symmetric 3x3 matrix).
+pub(super) fn smallest_moment([xx, yy, zz, xy, xz, yz]: [f64; 6]) -> f64 {
+    let off = xy * xy + xz * xz + yz * yz;
+    if off == 0.0 {
+        return xx.min(yy).min(zz);
+    }
+    let q = (xx + yy + zz) / 3.0;
+    let (a, b, c) = (xx - q, yy - q, zz - q);
+    let p = ((a * a + b * b + c * c + 2.0 * off) / 6.0).sqrt();
+    // det((A - q I) / p) / 2, within [-1, 1] but for round-off.
+    let det = a * (b * c - yz * yz) - xy * (xy * c - yz * xz) + xz * (xy * yz - b * xz);
+    let r = (det / (2.0 * p * p * p)).clamp(-1.0, 1.0);
+    let phi = r.acos() / 3.0;
+    q + 2.0 * p * (phi + 2.0 * std::f64::consts::PI / 3.0).cos()
 }
 
 fn positive(x: f64) -> Result<(), String> {
