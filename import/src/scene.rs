@@ -74,6 +74,7 @@ pub fn place(
             floor: false,
             self_collision: r.self_collision,
             positions: r.joints.clone(),
+            servo: r.servo,
         };
         match urdf::load(&path, options) {
             Ok(robot) => {

@@ -34,7 +34,7 @@ pub const IMPULSES_HEADER: &str = "step,t,kind,name,body_a,body_b,px,py,pz";
 
 pub use scene::{
     contact_label, BodyDesc, CameraDesc, FrictionCone, JointDesc, JointKind, PgsDesc, PgsStop,
-    PlacedShape, PlaneDesc, PositionUpdate, RobotDesc, Scene, SceneError, ShapeDesc, ShapeEntry,
-    SimDesc, SleepDesc, SolverChoice, DEFAULT_PGS_MAX_ITERATIONS, DEFAULT_PGS_TOLERANCE,
-    MAX_FEATURES, WORLD,
+    PlacedShape, PlaneDesc, PositionUpdate, RobotDesc, Scene, SceneError, ServoDesc, ShapeDesc,
+    ShapeEntry, SimDesc, SleepDesc, SolverChoice, DEFAULT_PGS_MAX_ITERATIONS,
+    DEFAULT_PGS_TOLERANCE, MAX_FEATURES, WORLD,
 };

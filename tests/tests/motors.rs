@@ -32,18 +32,11 @@ fn motor_impulse(e: &Engine) -> Vector3<f64> {
 /// A wheel (a sphere on a hinge through its centre, about z, zero
 /// gravity) with a motor of `max_effort` N m towards `speed` rad/s.
 fn wheel(h: f64, steps: u64, speed: f64, max_effort: f64) -> Engine {
-    let mut s = sim(h, steps, [0.0; 3]);
-    s += &sphere("wheel", 0.1, 1.0, [0.0; 3], [0.0; 3], 0.0, 0.0);
-    s += &joint_of(
-        "revolute",
-        "axle",
-        "world",
-        "wheel",
-        [0.0; 3],
-        Some([0.0, 0.0, 1.0]),
-    );
-    s += &format!("motor = {{ speed = {speed:e}, max_effort = {max_effort:e} }}\n");
-    engine(&s)
+    wheel_with(
+        h,
+        steps,
+        &format!("{{ speed = {speed:e}, max_effort = {max_effort:e} }}"),
+    )
 }
 
 /// A wheel of I = 2/5 m r^2 = 0.004 kg m^2 under a motor of 0.01 N m
@@ -230,6 +223,54 @@ fn a_motor_is_checked_and_named() {
             "joint \"h\".motor.speed",
         ),
         (with("revolute", z, "motor = { speed = 1.0 }"), "max_effort"),
+        (
+            with(
+                "revolute",
+                z,
+                "motor = { position = 0.5, max_effort = 1.0 }",
+            ),
+            "joint \"h\".motor.kp: missing: a position servo needs its stiffness kp",
+        ),
+        (
+            with(
+                "revolute",
+                z,
+                "motor = { position = 0.5, kp = 1.0, kd = -1.0, max_effort = 1.0 }",
+            ),
+            "joint \"h\".motor.kd = -1",
+        ),
+        (
+            with(
+                "revolute",
+                z,
+                "motor = { position = 0.5, kp = 1.0, speed = 1.0, max_effort = 1.0 }",
+            ),
+            "joint \"h\".motor.speed: a position servo has no speed",
+        ),
+        (
+            with(
+                "revolute",
+                z,
+                "motor = { position = 0.5, kp = 1.0, kv = 1.0, max_effort = 1.0 }",
+            ),
+            "joint \"h\".motor.kv: a position servo's gains are kp and kd",
+        ),
+        (
+            with(
+                "revolute",
+                z,
+                "motor = { speed = 1.0, kp = 1.0, max_effort = 1.0 }",
+            ),
+            "joint \"h\".motor.kp: kp and kd are a position servo's",
+        ),
+        (
+            with(
+                "revolute",
+                z,
+                "motor = { speed = 1.0, kv = 0.0, max_effort = 1.0 }",
+            ),
+            "joint \"h\".motor.kv = 0",
+        ),
     ] {
         let err = cosim_shared::Scene::parse(&(base.clone() + &joint), "t.toml")
             .expect_err("refused")
@@ -251,4 +292,125 @@ fn a_motor_is_checked_and_named() {
         Err(InputError::NonFinite { .. })
     ));
     assert_eq!(e.set_motor_speed(0, -1.0), Ok(()));
+}
+
+/// The wheel of `wheel` driven by `motor` (a TOML inline table).
+fn wheel_with(h: f64, steps: u64, motor: &str) -> Engine {
+    let mut s = sim(h, steps, [0.0; 3]);
+    s += &sphere("wheel", 0.1, 1.0, [0.0; 3], [0.0; 3], 0.0, 0.0);
+    s += &joint_of(
+        "revolute",
+        "axle",
+        "world",
+        "wheel",
+        [0.0; 3],
+        Some([0.0, 0.0, 1.0]),
+    );
+    s += &format!("motor = {motor}\n");
+    engine(&s)
+}
+
+/// One step of a wheel of inertia `i` under an implicit law whose impulse
+/// is `p = a - c w'` (`w'` the end rate), bounded by `cap`: the end rate,
+/// from `i (w' - w) = p`, written here from the law alone.
+fn implicit_step(i: f64, w: f64, a: f64, c: f64, cap: f64) -> (f64, f64) {
+    let free = (i * w + a) / (i + c);
+    let p = i * (free - w);
+    if p.abs() <= cap {
+        (free, p)
+    } else {
+        let p = cap.copysign(p);
+        (w + p / i, p)
+    }
+}
+
+/// A position servo (issue 45, point 6: PD, implicit in the step) turns
+/// the wheel (I = 0.004 kg m^2) from 0 to 0.5 rad, then, its target set
+/// by the controller's call, to -0.3: every step's rate is the implicit
+/// PD law's, `I (w' - w) = h kp (q* - q) - (h^2 kp + h kd) w'` with the
+/// coordinate `q' = q + h w'`, bounded by `F h`, computed here step by
+/// step (the first steps at the bound); it settles on each target.
+#[test]
+fn a_position_servo_follows_the_implicit_pd_law_and_its_bound() {
+    let (h, kp, kd, f, inertia) = (1e-3, 20.0, 0.4, 2.0, 0.4 * 1.0 * 0.1 * 0.1);
+    let motor = format!("{{ position = 0.5, kp = {kp:e}, kd = {kd:e}, max_effort = {f:e} }}");
+    let mut e = wheel_with(h, 3000, &motor);
+    let c = h * h * kp + h * kd;
+    let (mut q, mut w, mut worst, mut at_bound) = (0.0f64, 0.0f64, 0.0f64, 0);
+    for n in 0..3000 {
+        if n == 1500 {
+            e.set_motor_speed(0, -0.3).expect("a motor");
+        }
+        let target = if n < 1500 { 0.5 } else { -0.3 };
+        let (w1, p) = implicit_step(inertia, w, h * kp * (target - q), c, f * h);
+        at_bound += usize::from(p.abs() == f * h);
+        w = w1;
+        q += h * w;
+        assert!(e.step().ok());
+        let (eq, ew) = coordinate(&e.model().joints[0], e.state()).expect("a hinge");
+        worst = worst.max((ew - w).abs()).max((eq - q).abs());
+        if n == 1499 {
+            assert!((eq - 0.5).abs() < 1e-3, "settled at {eq} rad");
+        }
+    }
+    assert!(at_bound > 0, "the bound never acted");
+    // Lemke: round-off; PGS: within its tolerance, adding up.
+    assert!(worst < 50.0 * TOL, "the wheel left the law by {worst}");
+    let (eq, _) = coordinate(&e.model().joints[0], e.state()).expect("a hinge");
+    assert!((eq + 0.3).abs() < 1e-3, "settled at {eq} rad");
+}
+
+/// Stiff gains hold at a large step: a 1 kg bob on a 0.5 m arm held level
+/// against gravity by a servo of kp = 1e6 N m/rad at h = 10 ms, where an
+/// explicit PD diverges (h^2 kp / I = 400 > 4). It sags by the static
+/// deflection m g l / kp and stays there; no step gains energy.
+#[test]
+fn a_stiff_servo_holds_a_load_at_a_large_step() {
+    let (h, kp, kd) = (1e-2, 1e6, 1e3);
+    let motor =
+        format!("motor = {{ position = 0.0, kp = {kp:e}, kd = {kd:e}, max_effort = 100.0 }}\n");
+    let mut e = level_pendulum(h, 500, [0.0, 0.0, -G], 0.0, &motor);
+    let sag = 1.0 * G * 0.5 / kp;
+    let mut e_max = f64::NEG_INFINITY;
+    let e0 = cosim_server::engine::measure::energy(e.model(), e.state()).total;
+    run(&mut e, 500, |e, r| {
+        e_max = e_max.max(r.energy.total);
+        let (q, _) = coordinate(&e.model().joints[0], e.state()).expect("a hinge");
+        assert!(q.abs() < 2.0 * sag, "step {}: {q} rad", r.step);
+    });
+    let (q, w) = coordinate(&e.model().joints[0], e.state()).expect("a hinge");
+    // Gravity turns the bob about +y (down): the coordinate sags positive.
+    assert!(
+        (q - sag).abs() < 1e-3 * sag + TOL * h,
+        "sags {q} rad, not {sag}"
+    );
+    assert!(w.abs() < TOL, "still turns at {w} rad/s");
+    assert!(e_max <= e0 + 1e-9, "the energy rose {} J", e_max - e0);
+}
+
+/// A velocity actuator (`speed` with `kv`) is the implicit law `I (w' -
+/// w) = h kv (v* - w')`: the wheel's rate approaches 5 rad/s as that
+/// recursion does, and `speed = 0` with `kv` damps a spinning wheel as
+/// the same law.
+#[test]
+fn a_velocity_actuator_follows_its_gain() {
+    let (h, kv, inertia) = (1e-3, 0.02, 0.004);
+    for (speed, w0) in [(5.0, 0.0), (0.0, 3.0)] {
+        let motor = format!("{{ speed = {speed:e}, kv = {kv:e}, max_effort = 100.0 }}");
+        let mut e = wheel_with(h, 1000, &motor);
+        if w0 != 0.0 {
+            let mut s = e.state().clone();
+            s.bodies[0].w = Vector3::new(0.0, 0.0, w0);
+            e.set_state(s);
+        }
+        let (mut w, mut worst) = (w0, 0.0f64);
+        for _ in 0..1000 {
+            w = implicit_step(inertia, w, h * kv * speed, h * kv, 1.0).0;
+            assert!(e.step().ok());
+            worst = worst.max((rate(&e) - w).abs());
+        }
+        assert!(worst < 10.0 * TOL, "the wheel left the law by {worst}");
+        // 1 s is 5 time constants I / kv = 0.2 s.
+        assert!((w - speed).abs() < 0.01 * (speed - w0).abs(), "{w}");
+    }
 }

@@ -641,3 +641,58 @@ name = "gone"
         "{e}"
     );
 }
+
+/// A robot's servos (`servo` of a scene's `[[robot]]`, issue 45 point 6):
+/// every hinge a position servo holding its initial coordinate with the
+/// given gains, bounded by the URDF's `<limit effort>` (MuJoCo's
+/// forcerange from it); a joint without an effort limit is a problem
+/// naming it, unless the servo gives its own bound.
+#[test]
+fn a_robots_servos_hold_its_joints_bounded_by_their_effort() {
+    let servo = cosim_shared::ServoDesc {
+        kp: 100.0,
+        kd: 1.0,
+        max_effort: None,
+    };
+    let options = cosim_import::urdf::Options {
+        servo: Some(servo),
+        positions: [("elbow".to_string(), 0.25)].into(),
+        ..Default::default()
+    };
+    let with = |text: &str, options: cosim_import::urdf::Options| {
+        cosim_import::urdf::import(text, "arm.urdf", "arm", None, options)
+    };
+    let imported = with(&arm_text(), options.clone()).unwrap_or_else(|e| panic!("{e}"));
+    let motors: Vec<_> = imported.scene.joints[1..]
+        .iter()
+        .map(|j| j.motor.expect("a servo"))
+        .map(|m| (m.position, m.kp, m.kd, m.max_effort))
+        .collect();
+    assert_eq!(
+        motors,
+        [
+            (Some(0.0), Some(100.0), Some(1.0), 20.0),
+            (Some(0.25), Some(100.0), Some(1.0), 8.0)
+        ]
+    );
+    let no_effort = arm_text().replace(r#"effort="8" "#, "");
+    let e = with(&no_effort, options.clone())
+        .expect_err("no bound")
+        .to_string();
+    assert!(
+        e.contains("joint \"elbow\"") && e.contains("a servo needs the joint's <limit effort>"),
+        "{e}"
+    );
+    let own = cosim_import::urdf::Options {
+        servo: Some(cosim_shared::ServoDesc {
+            max_effort: Some(5.0),
+            ..servo
+        }),
+        ..options
+    };
+    let imported = with(&no_effort, own).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        imported.scene.joints[2].motor.map(|m| m.max_effort),
+        Some(5.0)
+    );
+}

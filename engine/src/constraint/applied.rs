@@ -17,8 +17,9 @@ pub struct Inputs {
     pub joint_torque: Vec<Vector3<f64>>,
     /// Per body: linear and angular impulse (N s, N m s), world frame.
     pub body_impulse: Vec<(Vector3<f64>, Vector3<f64>)>,
-    /// Per joint, its motor's target rate (rad/s or m/s; held until
-    /// changed, the scene's at first; 0 and unread without a motor).
+    /// Per joint, its motor's target: a rate (rad/s or m/s), or a position
+    /// servo's coordinate (rad or m); held until changed, the scene's at
+    /// first; 0 and unread without a motor.
     pub motor_speed: Vec<f64>,
 }
 

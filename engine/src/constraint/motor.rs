@@ -15,12 +15,26 @@
 //! `Mlcp::form_matrix`); PGS projects on the box. The bound is a constant
 //! in the LCP's `q`, so the matrix stays the one `prepare` made before
 //! the inputs, whatever speed a controller sets.
+//!
+//! A motor with gains (`Gains`) is the same row made compliant, `x' + eps
+//! p = v` (`drive`): its effort is the gains' law evaluated at the step's
+//! end, so a stiff servo holds at any step (MuJoCo's implicit actuators;
+//! ODE's ERP and CFM in physical units):
+//! - velocity actuator, effort `kv (v* - x')`: `p = h kv (v* - x')`, so
+//!   `eps = 1 / (h kv)` and `v = v*`;
+//! - position servo, effort `kp (q* - q_end) - kd x'` with `q_end = q + h
+//!   x'`: `p = h kp (q* - q) - (h^2 kp + h kd) x'`, so with `c = h^2 kp +
+//!   h kd`, `eps = 1 / c` and `v = h kp (q* - q) / c`.
+//!
+//! Inside the box the row is the law exactly; at the bound the effort is
+//! the bound. `eps` is constant over a run (gains and `h`), so it sits in
+//! the matrix beside the Delassus diagonal; `v` moves with `q` in `q`.
 
 use crate::constraint::joint::{axis, body};
 use crate::constraint::rows::Row;
 use crate::model::kinematics::anchor;
 use crate::model::state::State;
-use crate::model::Joint;
+use crate::model::{Gains, Joint, Motor};
 use nalgebra::Vector3;
 
 /// The row whose velocity is the coordinate's rate `x'`
@@ -48,4 +62,29 @@ pub fn rate_row(joint: &Joint, state: &State) -> Option<Row> {
 /// A the world, `+u` as B's, whose opposite A takes.
 pub fn impulse_on_a(axis: &Vector3<f64>, p: f64) -> Vector3<f64> {
     -axis * p
+}
+
+/// The row a motor drives over a step of `h` (see the module's notes):
+/// `(v, eps)`, its target rate and compliance, from its `target` (a rate,
+/// or a servo's coordinate) and the coordinate `q` at the step's start. A
+/// hinge's position error is taken the short way round.
+pub fn drive(motor: &Motor, target: f64, q: f64, h: f64, hinge: bool) -> (f64, f64) {
+    match motor.gains {
+        Gains::Rigid => (target, 0.0),
+        Gains::Velocity { kv } => (target, 1.0 / (h * kv)),
+        Gains::Position { kp, kd } => {
+            let mut e = target - q;
+            if hinge {
+                use std::f64::consts::{PI, TAU};
+                e = (e + PI).rem_euclid(TAU) - PI;
+            }
+            let c = h * h * kp + h * kd;
+            (h * kp * e / c, 1.0 / c)
+        }
+    }
+}
+
+/// A motor's compliance `eps` alone (constant over a run).
+pub fn compliance(motor: &Motor, h: f64) -> f64 {
+    drive(motor, 0.0, 0.0, h, false).1
 }

@@ -263,11 +263,24 @@ pub struct Joint {
 
 /// A joint motor: the coordinate's rate driven to `speed` (the scene's;
 /// a controller's `Engine::set_motor_speed` holds another) by an effort of
-/// at most `max_effort` (N m or N).
+/// at most `max_effort` (N m or N), rigidly or through `gains`; for a
+/// position servo `speed` is the target coordinate (`motor.rs`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Motor {
     pub speed: f64,
     pub max_effort: f64,
+    pub gains: Gains,
+}
+
+/// How a motor drives its coordinate (`motor.rs`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Gains {
+    /// The rate held at the target up to the effort bound.
+    Rigid,
+    /// A velocity actuator: effort `kv (v* - x')` (N m s/rad or N s/m).
+    Velocity { kv: f64 },
+    /// A position servo: effort `kp (q* - q) - kd x'`, implicit in the step.
+    Position { kp: f64, kd: f64 },
 }
 
 /// A coordinate's limits (rad or m, `joint::coordinate`'s units) and the
@@ -623,7 +636,15 @@ impl Model {
                         restitution: j.limit_restitution.unwrap_or(0.0),
                     }),
                     motor: j.motor.map(|m| Motor {
-                        speed: m.speed,
+                        speed: m.position.unwrap_or(m.speed),
+                        gains: match (m.position, m.kv) {
+                            (Some(_), _) => Gains::Position {
+                                kp: m.kp.unwrap_or(0.0),
+                                kd: m.kd.unwrap_or(0.0),
+                            },
+                            (None, Some(kv)) => Gains::Velocity { kv },
+                            (None, None) => Gains::Rigid,
+                        },
                         max_effort: m.max_effort,
                     }),
                 }

@@ -411,6 +411,7 @@ fn run(
         iterate: &split.rest,
         motor_row: &m.motor_row,
         motor_cap: &m.motor_cap,
+        motor_cfm: &m.motor_cfm,
     };
     solvers
         .pgs

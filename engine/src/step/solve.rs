@@ -58,7 +58,8 @@ impl Engine {
                     )
                     .map_err(StepError::Mlcp)?;
                 report.early_matrix |= report.resolves == 0 && !canonical && how != Assembly::Built;
-                ws.mlcp.set_motor_speeds(model, &self.inputs.motor_speed);
+                ws.mlcp
+                    .set_motor_speeds(model, &self.state, &self.inputs.motor_speed);
                 ws.mlcp.rhs(&ws.nu_free, &ws.contacts, p, Offsets::Full);
                 report.regularized += usize::from(ws.mlcp.joint_regularized);
             }

@@ -58,6 +58,9 @@ pub struct Options {
     /// Initial coordinates of joints by name (rad or m); the others start
     /// at zero, or at the nearer limit where the limits exclude it.
     pub positions: BTreeMap<String, f64>,
+    /// A position servo on every hinge and slider, holding its initial
+    /// coordinate until a controller sets another; default: passive.
+    pub servo: Option<cosim_shared::ServoDesc>,
 }
 
 /// A scene read from a URDF, and what the reading has to say about it.
@@ -531,7 +534,30 @@ impl Tree {
                 }
                 let _ = writeln!(s, "position = {q:?}");
             }
-            if j.friction > 0.0 && matches!(kind, "revolute" | "prismatic") {
+            if let (Some(servo), true) = (options.servo, hinge_or_slider) {
+                // The file's effort limit bounds it (MuJoCo's forcerange
+                // from a URDF's effort), unless the servo gives its own.
+                match servo.max_effort.or(j.effort.filter(|&e| e > 0.0)) {
+                    Some(f) => {
+                        let _ = writeln!(
+                            s,
+                            "motor = {{ position = {q:?}, kp = {:?}, kd = {:?}, max_effort = {f:?} }}",
+                            servo.kp, servo.kd
+                        );
+                        if j.friction > 0.0 {
+                            notes.push(format!(
+                                "joint {:?}: the servo drives it: its <dynamics friction> is left out",
+                                j.name
+                            ));
+                        }
+                    }
+                    None => problems.add(
+                        j.line,
+                        what,
+                        "a servo needs the joint's <limit effort> (or the servo's max_effort)",
+                    ),
+                }
+            } else if j.friction > 0.0 && hinge_or_slider {
                 let _ = writeln!(
                     s,
                     "motor = {{ speed = 0.0, max_effort = {:?} }}",

@@ -72,20 +72,43 @@ pub struct JointDesc {
     /// stops at the limit); only with `range`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub limit_restitution: Option<f64>,
-    /// `revolute` and `prismatic` only: a velocity motor (Rapier's and
-    /// ODE's joint motor, MuJoCo's velocity actuator with a force range).
+    /// `revolute` and `prismatic` only: a motor (actuator): a velocity
+    /// motor (Rapier's and ODE's joint motor), a velocity actuator with a
+    /// gain, or a position servo (MuJoCo's velocity and position
+    /// actuators with a force range), implicit in the step.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub motor: Option<MotorDesc>,
 }
 
-/// A joint motor: drives the coordinate's rate to `speed` with an effort of
-/// at most `max_effort`, one bounded row (`|p| <= max_effort h`).
+/// A joint motor with an effort of at most `max_effort`, one bounded row
+/// (`|p| <= max_effort h`), of one of three kinds:
+/// - `speed` alone: the coordinate's rate held at `speed` (rigid);
+/// - `speed` and `kv`: the effort `kv (speed - x')` (a velocity actuator;
+///   `speed = 0` is a viscous damper);
+/// - `position` and `kp` (and `kd`): the effort `kp (position - x) - kd
+///   x'` (a position servo, PD), evaluated at the step's end so that stiff
+///   gains hold at any step.
+///
+/// A controller changes the target: the rate, or the servo's position.
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MotorDesc {
-    /// The target rate (rad/s for a hinge, m/s for a slider); a
-    /// controller may change it.
+    /// The target rate (rad/s for a hinge, m/s for a slider); 0 if absent.
+    #[serde(default)]
     pub speed: f64,
+    /// A position servo's target coordinate (rad or m), with `kp`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<f64>,
+    /// A servo's stiffness (N m/rad or N/m), > 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kp: Option<f64>,
+    /// A servo's damping (N m s/rad or N s/m), >= 0; default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kd: Option<f64>,
+    /// A velocity actuator's gain (N m s/rad or N s/m), > 0; absent, the
+    /// rate is held rigidly.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kv: Option<f64>,
     /// The largest torque (N m) or force (N) the motor gives, > 0.
     pub max_effort: f64,
 }

@@ -39,4 +39,24 @@ pub struct RobotDesc {
     /// its nearer limit where the limits exclude zero.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub joints: BTreeMap<String, f64>,
+    /// A position servo on every hinge and slider (a joint `motor` with
+    /// `position`, `kp`, `kd`), holding its initial coordinate until a
+    /// controller sets another; default: the joints are passive.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub servo: Option<ServoDesc>,
+}
+
+/// `servo = { kp, kd, max_effort }`: the gains of a robot's servos.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ServoDesc {
+    /// Stiffness (N m/rad or N/m), > 0.
+    pub kp: f64,
+    /// Damping (N m s/rad or N s/m), >= 0.
+    #[serde(default)]
+    pub kd: f64,
+    /// The effort bound of every servo (N m or N); default: each joint's
+    /// `<limit effort>`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_effort: Option<f64>,
 }

@@ -313,6 +313,44 @@ impl Scene {
                         format!("= {}: must be finite", motor.speed),
                     ));
                 }
+                match (motor.position, motor.kp, motor.kd, motor.kv) {
+                    (Some(q), kp, kd, None) => {
+                        if !q.is_finite() {
+                            return Err(err(f("motor.position"), format!("= {q}: must be finite")));
+                        }
+                        if motor.speed != 0.0 {
+                            return Err(err(
+                                f("motor.speed"),
+                                "a position servo has no speed: give `position` or `speed`".into(),
+                            ));
+                        }
+                        let Some(kp) = kp else {
+                            return Err(err(
+                                f("motor.kp"),
+                                "missing: a position servo needs its stiffness kp".into(),
+                            ));
+                        };
+                        positive(kp).map_err(|m| err(f("motor.kp"), m))?;
+                        nonneg(kd.unwrap_or(0.0)).map_err(|m| err(f("motor.kd"), m))?;
+                    }
+                    (Some(_), _, _, Some(_)) => {
+                        return Err(err(
+                            f("motor.kv"),
+                            "a position servo's gains are kp and kd, not kv".into(),
+                        ))
+                    }
+                    (None, Some(_), _, _) | (None, _, Some(_), _) => {
+                        return Err(err(
+                            f("motor.kp"),
+                            "kp and kd are a position servo's: give its `position`".into(),
+                        ))
+                    }
+                    (None, None, None, kv) => {
+                        if let Some(kv) = kv {
+                            positive(kv).map_err(|m| err(f("motor.kv"), m))?;
+                        }
+                    }
+                }
                 positive(motor.max_effort).map_err(|m| err(f("motor.max_effort"), m))?;
             }
             if let Some(e) = j.limit_restitution {

@@ -196,6 +196,9 @@ pub struct Mlcp {
     pub motor_row: Vec<usize>,
     pub motor_speed: Vec<f64>,
     pub motor_cap: Vec<f64>,
+    /// Each motor's compliance `eps` (`motor::drive`; 0 when rigid), on
+    /// its pair's block of the LCP matrix and its row in PGS.
+    pub motor_cfm: Vec<f64>,
     /// Each motor's axis in the world at the step's start (`joint::axis`).
     pub motor_axis: Vec<Vector3<f64>>,
     /// Friction block `f` belongs to normal row `friction_of[f]`, with
@@ -320,12 +323,28 @@ impl Mlcp {
         self.z[at] - self.z[at + 1]
     }
 
-    /// Sets the motors' targets from the held inputs (per joint; read for
-    /// the joints with a motor), before [`Mlcp::rhs`].
-    pub fn set_motor_speeds(&mut self, model: &Model, speeds: &[f64]) {
+    /// Sets the rates the motors drive to from the held inputs (per
+    /// joint; read for the joints with a motor) and, for a servo, its
+    /// coordinate in `state` (`motor::drive`), before [`Mlcp::rhs`].
+    pub fn set_motor_speeds(&mut self, model: &Model, state: &State, speeds: &[f64]) {
         self.motor_speed.clear();
-        self.motor_speed
-            .extend(model.motors.iter().map(|&j| speeds[j]));
+        self.motor_speed.extend(model.motors.iter().map(|&j| {
+            let joint = &model.joints[j];
+            match joint.motor {
+                Some(m) if m.gains != crate::model::Gains::Rigid => {
+                    let q = crate::constraint::joint::coordinate(joint, state).map_or(0.0, |c| c.0);
+                    crate::constraint::motor::drive(
+                        &m,
+                        speeds[j],
+                        q,
+                        model.params.h,
+                        joint.slide.is_none(),
+                    )
+                    .0
+                }
+                _ => speeds[j],
+            }
+        }));
     }
 
     /// Forgets the matrix part: the positions (hence the rows) changed.
@@ -462,6 +481,7 @@ impl Mlcp {
         // The motors' rows, last in the basis (motor.rs).
         self.motor_row.clear();
         self.motor_cap.clear();
+        self.motor_cfm.clear();
         self.motor_axis.clear();
         for &j in &model.motors {
             let joint = &model.joints[j];
@@ -476,6 +496,8 @@ impl Mlcp {
                 .push(crate::constraint::joint::axis(joint, state).unwrap_or_else(Vector3::zeros));
             self.motor_row.push(model.joint_start[j]);
             self.motor_cap.push(motor.max_effort * p.h);
+            self.motor_cfm
+                .push(crate::constraint::motor::compliance(&motor, p.h));
         }
         self.nm = self.motor_row.len();
         self.offset.resize(self.rows.len(), 0.0);

@@ -307,11 +307,20 @@ impl Mlcp {
         // are +- the motor's basis row (fill_coeffs); `E` enters their
         // slack column, `-E^T` the slack row, whose constant `F h` is in
         // `q` (form_rhs).
+        // A compliant motor's row reads `w + eps p` (motor.rs): `eps` on
+        // the pair's block as `[[eps, -eps], [-eps, eps]]`.
         for k in 0..self.nm {
             let (at, s) = (self.motor_pair(k), m + self.nf + k);
             for row in [at, at + 1] {
                 self.lcp_m[row * n + s] = 1.0;
                 self.lcp_m[s * n + row] = -1.0;
+            }
+            let eps = self.motor_cfm[k];
+            if eps != 0.0 {
+                self.lcp_m[at * n + at] += eps;
+                self.lcp_m[at * n + at + 1] -= eps;
+                self.lcp_m[(at + 1) * n + at] -= eps;
+                self.lcp_m[(at + 1) * n + at + 1] += eps;
             }
         }
     }

@@ -73,6 +73,8 @@ pub struct PgsProblem<'a> {
     /// `F h`: the box its impulse is projected on (motor.rs).
     pub motor_row: &'a [usize],
     pub motor_cap: &'a [f64],
+    /// Per motor, its row's compliance `eps` (`motor::drive`; 0 rigid).
+    pub motor_cfm: &'a [f64],
 }
 
 impl PgsProblem<'_> {
@@ -564,9 +566,9 @@ impl Pgs {
         // The motors' rows, after the blocks in `x` (and so after every
         // island's other coordinates: each island's list stays ascending).
         self.motor_diag.clear();
-        for row in &p.rows[p.motor_rows()..] {
+        for (row, eps) in p.rows[p.motor_rows()..].iter().zip(p.motor_cfm) {
             let w = row.weighted(p.minv);
-            self.motor_diag.push(row.dot(&w));
+            self.motor_diag.push(row.dot(&w) + eps);
             self.weighted.push(w);
         }
     }

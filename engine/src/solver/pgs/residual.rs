@@ -29,7 +29,7 @@ impl Parts {
 /// `|x' - v*|` on the side its bound pushes, zero inside the box.
 fn motor_slack(p: &PgsProblem, k: usize, l: f64, nu: &[f64]) -> f64 {
     let row = p.motor_rows() + k;
-    let w = p.rows[row].velocity(nu) + p.offset[row];
+    let w = p.rows[row].velocity(nu) + p.offset[row] + p.motor_cfm[k] * l;
     let cap = p.motor_cap[k];
     if l >= cap {
         (-w).max(0.0)
@@ -176,7 +176,7 @@ impl Pgs {
             let k = self.motors[t] as usize;
             let row = p.motor_rows() + k;
             let (l, cap) = (x[Self::motor_at(p, k)], p.motor_cap[k]);
-            let w = p.rows[row].velocity(nu) + p.offset[row];
+            let w = p.rows[row].velocity(nu) + p.offset[row] + p.motor_cfm[k] * l;
             let r = l - (l - w).clamp(-cap, cap);
             out.abs2 += r * r;
             let at = p.nc + nf * nd + 2 * k;

@@ -223,7 +223,7 @@ impl Pgs {
         }
         let (at, row) = (Self::motor_at(p, k), p.motor_rows() + k);
         let lam = x[at];
-        let res = p.rows[row].velocity(nu) + p.offset[row];
+        let res = p.rows[row].velocity(nu) + p.offset[row] + p.motor_cfm[k] * lam;
         let cap = p.motor_cap[k];
         let new = (lam - omega * res / d).clamp(-cap, cap);
         let delta = new - lam;
