@@ -87,6 +87,11 @@ impl Controller {
         &self.info
     }
 
+    /// The scene's body and joint names, fetched from the server.
+    pub fn names(&self) -> Result<Names, ClientError> {
+        Names::fetch(&self.conn)
+    }
+
     pub fn connection(&self) -> &Connection {
         &self.conn
     }

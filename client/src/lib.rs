@@ -19,11 +19,13 @@ pub mod view;
 mod connection;
 mod controller;
 mod monitor;
+mod names;
 mod reader;
 
 pub use connection::{Connection, CONTROL_TIMEOUT};
 pub use controller::Controller;
 pub use monitor::Monitor;
+pub use names::Names;
 use reader::StateReader;
 
 pub use cosim_shared as shared;
@@ -88,6 +90,14 @@ pub enum ClientError {
     ServerGone { name: String },
     /// A state frame whose words did not match its header.
     BadFrame(WireError),
+    /// A body or joint name the scene does not have (`Names`).
+    UnknownName {
+        kind: &'static str,
+        name: String,
+        known: Vec<String>,
+    },
+    /// The server's scene did not read back.
+    BadScene(String),
 }
 
 /// How often a wait checks that the server is still there (a read of its
@@ -150,6 +160,10 @@ impl fmt::Display for ClientError {
                 "the server '{name}' is gone (killed, or it ended without a shutdown frame)"
             ),
             ClientError::BadFrame(e) => write!(f, "a malformed state frame: {e}"),
+            ClientError::UnknownName { kind, name, known } => {
+                write!(f, "no {kind} named {name:?} in the scene (its {kind} names: {known:?})")
+            }
+            ClientError::BadScene(e) => write!(f, "the server's scene: {e}"),
         }
     }
 }
