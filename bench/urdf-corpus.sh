@@ -9,9 +9,7 @@ cd "$(dirname "$0")/.."
 steps=${1:-500}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-python3 -m pip download -q --no-deps example-robot-data==6.0.0 -d "$work" >/dev/null
-(cd "$work" && python3 -m zipfile -e example_robot_data-*.whl x)
-robots="$work/x/cmeel.prefix/share/example-robot-data/robots"
+robots=$(scripts/robot-data.sh)
 export ROS_PACKAGE_PATH="$robots"
 cargo build --release -q -p cosim-server
 # A copy, so that a build during the run does not change what runs.

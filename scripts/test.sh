@@ -2,8 +2,8 @@
 # The tests, on a fresh clone with the toolchains alone (Rust, Python 3 with
 # pip, Node.js with npm): installs the third-party readers some tests use,
 # then runs every test. The README's test command; .ci/run calls it too.
-# tests/tests/robot_corpus.rs downloads example-robot-data (pip, 131 MB)
-# into target/robot-data on its first run.
+# The robot tests download example-robot-data (pip, 131 MB) into
+# target/robot-data on their first run (scripts/robot-data.sh).
 #
 #   scripts/test.sh            # everything
 #   scripts/test.sh -p cosim-engine   # extra arguments go to cargo test

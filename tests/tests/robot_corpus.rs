@@ -5,16 +5,17 @@
 //! with their reasons named, every other one running with no failed step
 //! and no energy gained beyond the step's first-order swing, and the most
 //! within 1 mm of penetration and 1e-4 m of joint error with every
-//! solver. Longer runs: `bench/urdf-corpus.sh`. And the Panda of the
-//! issue's named examples, holding its home pose under position servos. The package is downloaded
-//! once into target/ (`python3 -m pip download`, 131 MB).
+//! solver. Longer runs: `bench/urdf-corpus.sh`. And the named
+//! examples: the Panda holding its home pose under position servos, the
+//! scenes of examples/robots/ at ten times their duration with each
+//! solver. `scripts/robot-data.sh` downloads the package once into
+//! target/robot-data (pip, 131 MB).
 
 use cosim_server::engine::{Engine, Model};
 use cosim_shared::SolverChoice;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const PACKAGE: &str = "example-robot-data==6.0.0";
 const STEPS: u64 = 300;
 
 /// The robots folder of the package, downloaded and unpacked on first use
@@ -25,31 +26,18 @@ fn robots() -> PathBuf {
 }
 
 fn download() -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/robot-data");
-    let robots = root.join("x/cmeel.prefix/share/example-robot-data/robots");
-    if robots.is_dir() {
-        return robots;
-    }
-    std::fs::create_dir_all(&root).expect("target/robot-data");
-    let ok = Command::new("python3")
-        .args(["-m", "pip", "download", "-q", "--no-deps", PACKAGE, "-d"])
-        .arg(&root)
-        .status()
-        .is_ok_and(|s| s.success());
-    assert!(ok, "python3 -m pip download {PACKAGE} failed");
-    let wheel = std::fs::read_dir(&root)
-        .expect("the download")
-        .filter_map(|e| e.ok())
-        .map(|e| e.path())
-        .find(|p| p.extension().is_some_and(|e| e == "whl"))
-        .expect("the wheel");
-    let ok = Command::new("python3")
-        .args(["-m", "zipfile", "-e"])
-        .arg(&wheel)
-        .arg(root.join("x"))
-        .status()
-        .is_ok_and(|s| s.success());
-    assert!(ok && robots.is_dir(), "unpacking {}", wheel.display());
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scripts/robot-data.sh");
+    let out = Command::new("bash")
+        .arg(&script)
+        .output()
+        .expect("bash scripts/robot-data.sh");
+    assert!(
+        out.status.success(),
+        "scripts/robot-data.sh: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let robots = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());
+    assert!(robots.is_dir(), "{}", robots.display());
     robots
 }
 
@@ -253,4 +241,41 @@ fn a_panda_holds_its_home_pose_under_position_servos() {
     eprintln!(
         "Panda under servos: {worst:.2e} rad from home at most, {drift:.2e} rad of drift after 1 s"
     );
+}
+
+/// The scenes of examples/robots/ (robots of the package placed by a
+/// scene) run like every shipped scene: ten times their duration with
+/// each solver, no failed step.
+#[test]
+fn the_robot_example_scenes_run_ten_times_their_duration_with_each_solver() {
+    robots();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/robots");
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("examples/robots")
+        .filter_map(|e| e.ok())
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    scenes.sort();
+    assert!(!scenes.is_empty());
+    for path in &scenes {
+        let scene = cosim_import::scene::load(path)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .scene;
+        for solver in [SolverChoice::Lemke, SolverChoice::Pgs, SolverChoice::Auto] {
+            let mut model = Model::from_scene(&scene);
+            model.params.solver = solver;
+            let mut e = Engine::new(model);
+            for n in 0..10 * scene.step_count() {
+                let r = e.step();
+                assert!(
+                    r.ok(),
+                    "{} with {}: step {n}: {:?}",
+                    path.display(),
+                    solver.as_str(),
+                    r.error
+                );
+            }
+        }
+    }
 }
