@@ -3,16 +3,18 @@
 # pip, Node.js with npm): installs the third-party readers some tests use,
 # then runs every test. The README's test command; .ci/run calls it too.
 # The robot tests download example-robot-data (pip, 131 MB) into
-# target/robot-data on their first run (scripts/robot-data.sh).
+# target/robot-data on their first run (scripts/robot-data.sh), the MJCF
+# tests dm_control's suite and gymnasium's models (57 MB) into
+# target/mjcf-data (scripts/mjcf-data.sh).
 #
 #   scripts/test.sh            # everything
 #   scripts/test.sh -p cosim-engine   # extra arguments go to cargo test
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-echo "== python: the cosim package as a user installs it (iceoryx2 0.10, numpy), mcap (reads our recordings back)"
-python3 -m pip install --quiet --disable-pip-version-check ./python 'mcap==1.6.0'
-python3 -c 'import cosim, iceoryx2, mcap, numpy'
+echo "== python: the cosim package as a user installs it (iceoryx2 0.10, numpy), mcap (reads our recordings back), mujoco (its compiler is the MJCF importer's reference)"
+python3 -m pip install --quiet --disable-pip-version-check ./python 'mcap==1.6.0' 'mujoco==4.0.1'
+python3 -c 'import cosim, iceoryx2, mcap, numpy, mujoco'
 
 echo "== node: Foxglove's own client of its WebSocket protocol (@foxglove/ws-protocol), which reads cosim view"
 npm ci --prefix server/tests/foxglove_client --no-audit --no-fund --loglevel=error

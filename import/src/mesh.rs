@@ -28,7 +28,39 @@ impl Meshes {
     }
 }
 
+impl Meshes {
+    /// The hull's points (as [`Meshes::hull`]) and the volume (as `mass`),
+    /// centroid and unit-density inertia of the full convex hull of every
+    /// vertex (MuJoCo's `inertia="convex"`), in the mesh's frame.
+    pub fn solid(
+        &mut self,
+        path: &Path,
+        scale: [f64; 3],
+    ) -> Result<(Vec<[f64; 3]>, Option<crate::mjcf::mass::Mass>), String> {
+        let points = self.hull(path, scale)?;
+        let all = scaled(path, scale)?;
+        let hull = convex_hull(&all).map_err(|e| format!("{}: {e}", path.display()))?;
+        let triangles: Vec<[usize; 3]> = hull
+            .faces
+            .iter()
+            .flat_map(|f| (1..f.len().saturating_sub(1)).map(move |k| [f[0], f[k], f[k + 1]]))
+            .collect();
+        Ok((
+            points,
+            crate::mjcf::mass::of_solid(&hull.vertices, &triangles),
+        ))
+    }
+}
+
 fn read_hull(path: &Path, scale: [f64; 3]) -> Result<Vec<[f64; 3]>, String> {
+    let points = scaled(path, scale)?;
+    let few = supports(&points);
+    let hull = convex_hull(&few).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(hull.vertices)
+}
+
+/// Every vertex of the mesh in `path`, scaled per axis.
+fn scaled(path: &Path, scale: [f64; 3]) -> Result<Vec<[f64; 3]>, String> {
     let vertices: Vec<[f32; 3]> = match mesh_loader::Loader::default().load(path) {
         Ok(scene) => scene
             .meshes
@@ -52,9 +84,7 @@ fn read_hull(path: &Path, scale: [f64; 3]) -> Result<Vec<[f64; 3]>, String> {
             ]
         })
         .collect();
-    let few = supports(&points);
-    let hull = convex_hull(&few).map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(hull.vertices)
+    Ok(points)
 }
 
 /// At most this many directions pick a hull's vertices: a CAD mesh's hull

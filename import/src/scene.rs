@@ -59,12 +59,9 @@ pub fn place(
             continue;
         };
         let path = dir.map_or_else(|| Path::new(&r.file).to_path_buf(), |d| d.join(&r.file));
-        if !path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
-        {
+        if !crate::is_robot(&path) {
             problems.push(format!(
-                "{what}.file = {:?}: not a .urdf (URDF is the robot format read now)",
+                "{what}.file = {:?}: not a robot description: .urdf (URDF) or .xml (MJCF)",
                 r.file
             ));
             continue;
@@ -75,8 +72,9 @@ pub fn place(
             self_collision: r.self_collision,
             positions: r.joints.clone(),
             servo: r.servo,
+            keyframe: r.keyframe.clone(),
         };
-        match urdf::load(&path, options) {
+        match crate::load(&path, options) {
             Ok(robot) => {
                 notes.extend(
                     robot

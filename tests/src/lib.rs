@@ -212,3 +212,39 @@ pub fn level_pendulum(h: f64, steps: u64, gravity: [f64; 3], w0: f64, extra: &st
     s += extra;
     engine(&s)
 }
+
+/// What a run of a robot of a corpus found.
+pub struct CorpusRun {
+    pub steps: u64,
+    /// The first failed step's error, if one failed (the run stops there).
+    pub failed: Option<String>,
+    pub penetration: f64,
+    pub joint_error: f64,
+    /// The most the total energy rose above the start's (J).
+    pub gain: f64,
+}
+
+/// Runs `model` for `steps` steps, stopping at a failed one.
+pub fn corpus_run(model: cosim_server::engine::Model, steps: u64) -> CorpusRun {
+    let mut e = Engine::new(model);
+    let e0 = cosim_server::engine::measure::energy(e.model(), e.state()).total;
+    let mut r = CorpusRun {
+        steps: 0,
+        failed: None,
+        penetration: 0.0,
+        joint_error: 0.0,
+        gain: 0.0,
+    };
+    for _ in 0..steps {
+        let s = e.step();
+        r.steps += 1;
+        if let Some(err) = s.error {
+            r.failed = Some(format!("{err:?}"));
+            break;
+        }
+        r.penetration = r.penetration.max(s.max_penetration);
+        r.joint_error = r.joint_error.max(s.max_joint_error);
+        r.gain = r.gain.max(s.energy.total - e0);
+    }
+    r
+}

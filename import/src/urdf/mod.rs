@@ -44,41 +44,11 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// What the importer adds that the file does not say.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Options {
-    /// Weld a root with mass to the world (a fixed-base arm described
-    /// without a `world` link). Default: it floats.
-    pub fixed_base: bool,
-    /// A floor plane under the robot's lowest point. Default: none.
-    pub floor: bool,
-    /// The robot's links touch each other (but a joint's two links).
-    /// Default: they do not, as in PyBullet unless asked.
-    pub self_collision: bool,
-    /// Initial coordinates of joints by name (rad or m); the others start
-    /// at zero, or at the nearer limit where the limits exclude it.
-    pub positions: BTreeMap<String, f64>,
-    /// A position servo on every hinge and slider, holding its initial
-    /// coordinate until a controller sets another; default: passive.
-    pub servo: Option<cosim_shared::ServoDesc>,
-}
-
-/// A scene read from a URDF, and what the reading has to say about it.
-#[derive(Debug, Clone)]
-pub struct Imported {
-    pub scene: Scene,
-    /// What was approximated, merged or left out, one line each.
-    pub notes: Vec<String>,
-}
+pub use crate::options::{Imported, Options};
 
 /// Reads a `.urdf` file as a scene named after the file.
 pub fn load(path: &Path, options: Options) -> Result<Imported, SceneError> {
-    let file = path.display().to_string();
-    let text = cosim_shared::scene::read_file(path)?;
-    let name = path
-        .file_stem()
-        .map_or("robot".into(), |s| s.to_string_lossy().into_owned());
-    import(&text, &file, &name, path.parent(), options)
+    crate::read_with(path, options, import)
 }
 
 /// The scene of URDF text `text` (from `file`, whose folder `dir` mesh

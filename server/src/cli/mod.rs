@@ -317,18 +317,19 @@ pub struct PlotArgs {
     pub mcap: bool,
 }
 
-/// What a robot file (URDF) does not say: its base and a floor.
+/// What a robot file (URDF, MJCF) does not say: its base and a floor.
 #[derive(clap::Args, Debug, Clone, Copy, Default)]
 pub struct RobotArgs {
-    /// A URDF's root link with mass is welded to the world (a fixed-base
-    /// arm); by default it floats, as in PyBullet and Drake.
+    /// The robot's floating root (a URDF root link with mass, an MJCF
+    /// free joint) is welded to the world (a fixed-base arm); by default
+    /// it floats, as in PyBullet, Drake and MuJoCo.
     #[arg(long)]
     pub fixed_base: bool,
-    /// Add a floor plane under a URDF robot's lowest point (none by
-    /// default).
+    /// Add a floor plane: under a URDF robot's lowest point, at z = 0 for
+    /// MJCF (none by default; MJCF models carry their own).
     #[arg(long)]
     pub floor: bool,
-    /// A URDF robot's links touch each other (a joint's two links never);
+    /// The robot's bodies touch each other (a joint's two bodies never);
     /// by default they do not, as in PyBullet.
     #[arg(long)]
     pub self_collision: bool,
@@ -336,7 +337,7 @@ pub struct RobotArgs {
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct RunArgs {
-    /// Scene file (TOML) or robot (URDF); the built-in reference scene
+    /// Scene file (TOML) or robot (URDF, or MJCF .xml); the built-in reference scene
     /// when omitted.
     pub scene: Option<PathBuf>,
     #[command(flatten)]

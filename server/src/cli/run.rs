@@ -13,18 +13,18 @@ use std::time::Instant;
 /// Loads the scene and applies the command-line overrides, validating both.
 pub fn load(args: &RunArgs) -> Result<Scene, SceneError> {
     let mut scene = match &args.scene {
-        // A URDF robot (`.urdf`) is read as a scene of its own
-        // (cosim_import::urdf), a scene's `[[robot]]`s placed
+        // A robot (`.urdf`, `.xml`: MJCF) is read as a scene of its own
+        // (cosim_import), a scene's `[[robot]]`s placed
         // (cosim_import::scene); what they approximated or merged is said.
         Some(path) => {
-            let imported = if path.extension().is_some_and(|e| e == "urdf") {
-                let options = cosim_import::urdf::Options {
+            let imported = if cosim_import::is_robot(path) {
+                let options = cosim_import::Options {
                     fixed_base: args.robot.fixed_base,
                     floor: args.robot.floor,
                     self_collision: args.robot.self_collision,
                     ..Default::default()
                 };
-                cosim_import::urdf::load(path, options)?
+                cosim_import::load(path, options)?
             } else {
                 cosim_import::scene::load(path)?
             };

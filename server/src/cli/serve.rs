@@ -12,7 +12,7 @@ use std::time::Duration;
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct ServeArgs {
-    /// Scene file (TOML) or robot (URDF); the built-in reference scene
+    /// Scene file (TOML) or robot (URDF, or MJCF .xml); the built-in reference scene
     /// when omitted.
     pub scene: Option<PathBuf>,
     #[command(flatten)]

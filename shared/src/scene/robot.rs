@@ -8,12 +8,13 @@ use std::collections::BTreeMap;
 
 use super::body::identity_quaternion;
 
-/// `[[robot]]`: a URDF placed at a pose, its base floating or fixed, its
+/// `[[robot]]`: a URDF or MJCF model placed at a pose, its base floating or fixed, its
 /// joints at their initial coordinates.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RobotDesc {
-    /// The robot's file (`.urdf`), relative to the scene file's folder.
+    /// The robot's file (`.urdf`, or `.xml`: MJCF), relative to the scene
+    /// file's folder.
     pub file: String,
     /// The robot's bodies and joints are named `name/link` and
     /// `name/joint`; default: the file's stem. Two robots need two names.
@@ -44,6 +45,10 @@ pub struct RobotDesc {
     /// controller sets another; default: the joints are passive.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub servo: Option<ServoDesc>,
+    /// MJCF only: the `<key>` whose `qpos` is the initial state; default:
+    /// the bodies as written (MuJoCo's `qpos0`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub keyframe: Option<String>,
 }
 
 /// `servo = { kp, kd, max_effort }`: the gains of a robot's servos.

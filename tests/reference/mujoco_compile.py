@@ -1,0 +1,104 @@
+"""MuJoCo's own compiler on MJCF files: the reference the MJCF importer is
+checked against (tests/tests/mjcf.rs). For each file named on the command
+line, prints one JSON line: the bodies as the importer makes them (a body
+with joints, a mocap body or a child of the world, with the bodies welded
+to it without joints), each with its mass, centre of mass and inertia
+about it in the world at qpos0, combined here from MuJoCo's per-body
+values by the parallel axis theorem; and every joint's world anchor,
+axis and range (when limited). The configuration is qpos0 with each
+limited hinge or slide coordinate outside its range moved to the nearer
+limit, where the importer starts it (MuJoCo starts it outside and lets the
+limit push it in). Meshes' masses come from their convex hulls
+(`inertia="convex"`), as the importer's do. Names as the importer gives them: MuJoCo's,
+or body<id> / joint<id> where the file has none."""
+
+import json
+import sys
+
+import mujoco
+import numpy as np
+
+
+def compile_file(path):
+    spec = mujoco.MjSpec.from_file(path)
+    # A mesh's mass from its convex hull, as the importer takes it (MuJoCo's
+    # default "legacy" sums unsigned pyramids from a centre, which differs
+    # on a mesh that is not convex).
+    for mesh in spec.meshes:
+        mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_CONVEX
+    m = spec.compile()
+    d = mujoco.MjData(m)
+    for j in range(m.njnt):
+        if m.jnt_limited[j] and m.jnt_type[j] in (2, 3):
+            a = m.jnt_qposadr[j]
+            d.qpos[a] = min(max(d.qpos[a], m.jnt_range[j][0]), m.jnt_range[j][1])
+    mujoco.mj_kinematics(m, d)
+
+    def body_name(b):
+        n = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b)
+        return n if n else f"body{b}"
+
+    def joint_name(j):
+        n = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j)
+        return n if n else f"joint{j}"
+
+    top = [0] * m.nbody
+    for b in range(1, m.nbody):
+        parent = m.body_parentid[b]
+        own = m.body_jntnum[b] > 0 or parent == 0 or m.body_mocapid[b] >= 0
+        top[b] = b if own else top[parent]
+    bodies = []
+    for t in range(1, m.nbody):
+        if top[t] != t:
+            continue
+        members = [b for b in range(1, m.nbody) if top[b] == t]
+        mass = sum(m.body_mass[b] for b in members)
+        if mass <= 0:
+            bodies.append({"name": body_name(t), "mass": 0.0})
+            continue
+        com = sum(m.body_mass[b] * d.xipos[b] for b in members) / mass
+        inertia = np.zeros((3, 3))
+        for b in members:
+            r = d.ximat[b].reshape(3, 3)
+            own = r @ np.diag(m.body_inertia[b]) @ r.T
+            x = d.xipos[b] - com
+            inertia += own + m.body_mass[b] * (np.dot(x, x) * np.eye(3) - np.outer(x, x))
+        bodies.append(
+            {
+                "name": body_name(t),
+                "mass": float(mass),
+                "com": com.tolist(),
+                "inertia": inertia.tolist(),
+                "members": [body_name(b) for b in members],
+                # MuJoCo keeps mesh vertices in single precision.
+                "mesh": any(
+                    m.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH
+                    for g in range(m.ngeom)
+                    if m.geom_bodyid[g] in members
+                ),
+            }
+        )
+    kinds = {0: "free", 1: "ball", 2: "slide", 3: "hinge"}
+    joints = []
+    for j in range(m.njnt):
+        joints.append(
+            {
+                "name": joint_name(j),
+                "type": kinds[int(m.jnt_type[j])],
+                "body": body_name(m.jnt_bodyid[j]),
+                "anchor": d.xanchor[j].tolist(),
+                "axis": d.xaxis[j].tolist(),
+                "range": m.jnt_range[j].tolist() if m.jnt_limited[j] else None,
+            }
+        )
+    return {"bodies": bodies, "joints": joints, "timestep": m.opt.timestep,
+            "gravity": m.opt.gravity.tolist()}
+
+
+for path in sys.argv[1:]:
+    try:
+        out = compile_file(path)
+    except Exception as e:  # the file's problem, said in its line
+        out = {"error": str(e)}
+    out["file"] = path
+    print(json.dumps(out))
