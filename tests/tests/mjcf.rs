@@ -53,7 +53,10 @@ pub fn corpus() -> Vec<PathBuf> {
 /// MuJoCo's compilation of each file, one JSON object per file.
 fn reference(files: &[PathBuf]) -> Vec<Value> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("reference/mujoco_compile.py");
+    // MuJoCo writes its warnings (settotalmass is deprecated) to
+    // MUJOCO_LOG.TXT in the working folder: a temporary one.
     let out = Command::new("python3")
+        .current_dir(std::env::temp_dir())
         .arg(&script)
         .args(files)
         .output()
