@@ -494,6 +494,16 @@ impl Recorder {
             return Ok(());
         };
         let t = f.sim_time;
+        if rec.written().messages.is_empty() {
+            let (once, not_drawn) = cosim_foxglove::visuals::sent_once(&self.scene, drawing);
+            for what in &not_drawn {
+                eprintln!("cosim record: warning: the recording does not draw {what}");
+            }
+            rec.not_drawn(not_drawn);
+            for (topic, msg) in &once {
+                rec.put(topic, schema::scene_update, t, msg)?;
+            }
+        }
         let poses = view::poses(f);
         let msg = view::scene_message(drawing, points, f, &poses);
         rec.put("/scene", schema::scene_update, t, &msg)?;

@@ -56,6 +56,9 @@ pub struct ViewStats {
 const SCENE: u32 = 1;
 const TF: u32 = 2;
 const SOLVER: u32 = 3;
+/// `/shapes` and `/visuals` (those the scene has), from channel `ONCE`
+/// on: sent to each new subscriber.
+const ONCE: u32 = 4;
 /// `/bodies/NAME` of body `i` is channel `BODIES + i`; `/joints/NAME` of
 /// joint `j` (hinges and sliders only) is `BODIES + bodies + j`.
 const BODIES: u32 = 16;
@@ -111,7 +114,25 @@ pub fn view(
             });
         }
     }
+    let (once, not_drawn) = cosim_foxglove::visuals::sent_once(&scene, &drawing);
+    for what in &not_drawn {
+        eprintln!("cosim view: warning: not drawn: {what}");
+    }
+    // Channel id and text of each message sent to a new subscriber.
+    let once: Vec<(u32, String)> = once
+        .iter()
+        .enumerate()
+        .map(|(k, (topic, msg))| {
+            channels.push(Channel {
+                id: ONCE + k as u32,
+                topic: topic.to_string(),
+                schema: schema::scene_update(),
+            });
+            (ONCE + k as u32, msg.to_string())
+        })
+        .collect();
     let mut live = Live::bind(opts.listen.as_str(), &format!("cosim {name}"), channels)?;
+    live.allow_message(once.iter().map(|(_, m)| m.len()).sum());
     let monitor = Monitor::polling(name)?;
     listening(live.local_addr()?);
     let period = Duration::from_secs_f64(1.0 / opts.rate.max(0.1));
@@ -126,6 +147,13 @@ pub fn view(
                 Event::Disconnected(p) => eprintln!("cosim view: client {p} left"),
                 Event::Refused(p, why) => eprintln!("cosim view: refused {p}: {why}"),
                 Event::BadRequest(p, why) => eprintln!("cosim view: client {p}: {why}"),
+                Event::Subscribed(_, channel) => {
+                    for (id, m) in &once {
+                        if *id == channel {
+                            live.publish(*id, 0, m.as_bytes());
+                        }
+                    }
+                }
             }
         }
         if let Some(f) = monitor.latest()? {

@@ -179,6 +179,85 @@ fn polygon_in_image(poly: &[(f64, f64)], cam: &Camera) -> Vec<(i32, i32)> {
         .collect()
 }
 
+/// Points whose cast outlines a shape's shadow: a box's corners, a hull's
+/// vertices, a sphere's rim seen along `up` (24 points), a capsule's two
+/// end rims.
+fn outline_points(
+    model: &Model,
+    shape: &Shape,
+    c: &Vector3<f64>,
+    q: &UnitQuaternion<f64>,
+    up: &Vector3<f64>,
+) -> Vec<Vector3<f64>> {
+    let t1 = cosim_engine::model::kinematics::perpendicular(up);
+    let t2 = up.cross(&t1);
+    let rim = |at: Vector3<f64>, r: f64| {
+        (0..24).map(move |k| {
+            let a = k as f64 * std::f64::consts::TAU / 24.0;
+            at + (t1 * a.cos() + t2 * a.sin()) * r
+        })
+    };
+    match *shape {
+        Shape::Sphere { radius } => rim(*c, radius).collect(),
+        Shape::Capsule {
+            radius,
+            half_length,
+        } => {
+            let axis = q.transform_vector(&Vector3::new(0.0, 0.0, half_length));
+            rim(c - axis, radius).chain(rim(c + axis, radius)).collect()
+        }
+        Shape::Box { half } => (0..8)
+            .map(|k| {
+                let s = |bit: usize| if k >> bit & 1 == 1 { 1.0 } else { -1.0 };
+                c + q.transform_vector(&Vector3::new(s(0) * half.x, s(1) * half.y, s(2) * half.z))
+            })
+            .collect(),
+        Shape::Hull { index, .. } => model.hulls[index]
+            .vertices
+            .iter()
+            .map(|v| c + q.transform_vector(v))
+            .collect(),
+    }
+}
+
+/// The convex hull of points on the image (Andrew's monotone chain),
+/// rounded to pixels, counter-clockwise.
+fn convex_outline(mut p: Vec<(f64, f64)>) -> Vec<(i32, i32)> {
+    p.retain(|a| a.0.is_finite() && a.1.is_finite());
+    p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    p.dedup();
+    if p.len() < 3 {
+        return p
+            .iter()
+            .map(|a| (a.0.round() as i32, a.1.round() as i32))
+            .collect();
+    }
+    let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| {
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    let mut hull: Vec<(f64, f64)> = Vec::with_capacity(2 * p.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let points: Box<dyn Iterator<Item = &(f64, f64)>> = if pass == 0 {
+            Box::new(p.iter())
+        } else {
+            Box::new(p.iter().rev())
+        };
+        for &x in points {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], x) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(x);
+        }
+        hull.pop();
+    }
+    hull.iter()
+        .map(|a| (a.0.round() as i32, a.1.round() as i32))
+        .collect()
+}
+
 /// A "nice" grid spacing (1, 2 or 5 times a power of ten) near `span`.
 fn nice(span: f64) -> f64 {
     let p = 10f64.powf(span.log10().floor());
@@ -370,14 +449,22 @@ fn draw_frame<DB: DrawingBackend>(
             }
             // Along gravity to the plane.
             let foot = c - up * (height / f.normal.dot(&up));
-            let rp = screen_radius(shape, cam);
             let (fx, fy) = pix(&foot);
-            area.draw(&Circle::new(
-                (fx, fy),
-                (0.8 * rp as f64) as i32,
-                RGBColor(120, 120, 115).mix(0.45).filled(),
-            ))
-            .map_err(e)?;
+            // The shape's outline cast along gravity onto the plane.
+            let cast: Vec<(f64, f64)> = outline_points(model, shape, &c, &q, &up)
+                .iter()
+                .map(|p| {
+                    cam.project(&(p - up * ((f.normal.dot(p) - f.offset) / f.normal.dot(&up))))
+                })
+                .collect();
+            let outline = convex_outline(cast);
+            if outline.len() >= 3 {
+                area.draw(&Polygon::new(
+                    outline,
+                    RGBColor(120, 120, 115).mix(0.45).filled(),
+                ))
+                .map_err(e)?;
+            }
             area.draw(&PathElement::new(
                 vec![pix(&c), (fx, fy)],
                 RGBColor(110, 110, 110).stroke_width(1),
@@ -728,6 +815,71 @@ mod tests {
             width: 200,
             height: 100,
         }
+    }
+
+    /// Twice the area of a polygon (shoelace).
+    fn area2(p: &[(i32, i32)]) -> f64 {
+        (0..p.len())
+            .map(|k| {
+                let (a, b) = (p[k], p[(k + 1) % p.len()]);
+                (a.0 as f64) * (b.1 as f64) - (b.0 as f64) * (a.1 as f64)
+            })
+            .sum::<f64>()
+            .abs()
+    }
+
+    /// A shadow has its shape's outline: a box turned about the vertical
+    /// casts its footprint (a rectangle of its area, not a disc), a capsule
+    /// lying flat a stadium as long as it is.
+    #[test]
+    fn a_shadow_is_the_outline_of_its_shape() {
+        let model = Model::from_scene(
+            &cosim_shared::Scene::parse(
+                "[sim]\ndt = 0.01\nduration = 1.0\n[[body]]\nname = \"a\"\nhalf_extents = [0.3, 0.1, 0.05]\nmass = 1.0\nposition = [0.0, 0.0, 1.0]\n",
+                "test",
+            )
+            .expect("a scene"),
+        );
+        // Looking straight down: screen x is world x, screen y world -y.
+        let cam = Camera {
+            target: Vector3::zeros(),
+            right: Vector3::x(),
+            up: Vector3::y(),
+            forward: -Vector3::z(),
+            scale: 100.0,
+            width: 400,
+            height: 400,
+        };
+        let up = Vector3::z();
+        let q = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.5);
+        let shape = model.bodies[0].shapes[0].shape;
+        let cast: Vec<(f64, f64)> =
+            outline_points(&model, &shape, &Vector3::new(0.0, 0.0, 1.0), &q, &up)
+                .iter()
+                .map(|p| cam.project(&Vector3::new(p.x, p.y, 0.0)))
+                .collect();
+        let outline = convex_outline(cast);
+        assert_eq!(outline.len(), 4, "{outline:?}");
+        // 0.6 m by 0.2 m at 100 px/m: 1200 px^2 (rounding to pixels).
+        let area = area2(&outline) / 2.0;
+        assert!((area - 1200.0).abs() < 40.0, "{area}");
+        let capsule = Shape::Capsule {
+            radius: 0.1,
+            half_length: 0.5,
+        };
+        let flat = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
+        let cast: Vec<(f64, f64)> = outline_points(&model, &capsule, &Vector3::zeros(), &flat, &up)
+            .iter()
+            .map(|p| cam.project(&Vector3::new(p.x, p.y, 0.0)))
+            .collect();
+        let outline = convex_outline(cast);
+        let xs: Vec<i32> = outline.iter().map(|p| p.0).collect();
+        let width = xs.iter().max().unwrap_or(&0) - xs.iter().min().unwrap_or(&0);
+        // 1.2 m end to end.
+        assert!((width - 120).abs() <= 2, "{width}");
+        // A stadium: 1 m x 0.2 m plus a disc of 0.1 m, 2314 px^2.
+        let area = area2(&outline) / 2.0;
+        assert!((area - 2314.0).abs() < 60.0, "{area}");
     }
 
     #[test]

@@ -115,7 +115,7 @@ fn turn(from: &Vector3<f64>, to: &Vector3<f64>) -> UnitQuaternion<f64> {
 
 /// A scene entity with only the primitives given (Foxglove wants every
 /// list present).
-fn entity(stamp: &Value, id: &str, parts: &[(&str, Value)]) -> Value {
+pub(crate) fn entity(stamp: &Value, id: &str, parts: &[(&str, Value)]) -> Value {
     let mut e = json!({
         "timestamp": stamp, "frame_id": "world", "id": id,
         "lifetime": time(0.0), "frame_locked": false, "metadata": [],
@@ -219,9 +219,8 @@ impl Drawing {
         let mut entities = Vec::with_capacity(poses.len() + self.planes.len() + 2);
         for (b, (p, shapes)) in poses.iter().zip(&self.shapes).enumerate() {
             let c = color(b, 1.0);
-            let (mut spheres, mut cylinders, mut cubes, mut triangles) =
-                (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-            for (placed, hull) in shapes {
+            let (mut spheres, mut cylinders, mut cubes) = (Vec::new(), Vec::new(), Vec::new());
+            for (placed, _) in shapes {
                 let q = &(p.orientation * quaternion(&placed.orientation));
                 let x = &(p.position + p.orientation * Vector3::from(placed.position));
                 let ball = |at: &Vector3<f64>, r: f64, c: &Value| json!({ "pose": pose(at, q), "size": vec3(&Vector3::repeat(2.0 * r)), "color": c });
@@ -241,9 +240,8 @@ impl Drawing {
                     }
                     ShapeDesc::Box { half_extents: h } => cubes.push(json!({ "pose": pose(x, q),
                              "size": vec3(&(Vector3::from(h) * 2.0)), "color": c })),
-                    ShapeDesc::Hull { .. } => triangles.push(json!({ "pose": pose(x, q),
-                             "points": hull.iter().map(|v| vec3(&Vector3::from(*v))).collect::<Vec<_>>(),
-                             "color": c, "colors": [], "indices": [] })),
+                    // Sent once, locked to the body's frame (`hulls_update`).
+                    ShapeDesc::Hull { .. } => {}
                 }
                 // The marker just inside the surface on the body's x axis,
                 // on a body's one shape at its centre of mass (shapes away
@@ -264,7 +262,6 @@ impl Drawing {
                 }
             }
             let parts = [
-                ("triangles", Value::Array(triangles)),
                 ("cylinders", Value::Array(cylinders)),
                 ("cubes", Value::Array(cubes)),
                 ("spheres", Value::Array(spheres)),
@@ -319,6 +316,42 @@ impl Drawing {
             &[("arrows", Value::Array(arrows))],
         ));
         json!({ "deletions": [], "entities": entities })
+    }
+
+    /// The hull shapes (collision meshes) as one `foxglove.SceneUpdate`,
+    /// each body's locked to its frame (which `/tf` moves), so sent once
+    /// rather than per state (a Panda's hulls are 0.4 MB of JSON); `None`
+    /// when no body has a hull.
+    pub fn hulls_update(&self) -> Option<Value> {
+        let stamp = time(0.0);
+        let entities: Vec<Value> = self
+            .shapes
+            .iter()
+            .enumerate()
+            .filter(|(_, shapes)| shapes.iter().any(|(_, t)| !t.is_empty()))
+            .map(|(b, shapes)| {
+                let c = color(b, 1.0);
+                let triangles: Vec<Value> = shapes
+                    .iter()
+                    .filter(|(_, t)| !t.is_empty())
+                    .map(|(placed, t)| {
+                        let at = Vector3::from(placed.position);
+                        json!({ "pose": pose(&at, &quaternion(&placed.orientation)),
+                                "points": t.iter().map(|v| vec3(&Vector3::from(*v))).collect::<Vec<_>>(),
+                                "color": c, "colors": [], "indices": [] })
+                    })
+                    .collect();
+                let mut e = entity(
+                    &stamp,
+                    &format!("hull/{}", self.names[b]),
+                    &[("triangles", Value::Array(triangles))],
+                );
+                e["frame_id"] = json!(self.names[b]);
+                e["frame_locked"] = json!(true);
+                e
+            })
+            .collect();
+        (!entities.is_empty()).then(|| json!({ "deletions": [], "entities": entities }))
     }
 
     /// The `foxglove.FrameTransforms` of a state: `world` to each body's

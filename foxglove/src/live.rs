@@ -62,6 +62,9 @@ pub enum Event {
     /// A request that could not be served; the client was told the same
     /// in a `status` message.
     BadRequest(SocketAddr, String),
+    /// A client subscribed to a channel (its id): what is sent once
+    /// (`/visuals`) goes now.
+    Subscribed(SocketAddr, u32),
 }
 
 /// The server: a listener, the channels, the connected clients.
@@ -73,6 +76,8 @@ pub struct Live {
     clients: Vec<Client>,
     dropped: u64,
     sent: u64,
+    /// Bytes a client may have queued (at least [`MAX_QUEUED`]).
+    max_queued: usize,
 }
 
 impl Live {
@@ -106,7 +111,14 @@ impl Live {
             clients: Vec::new(),
             dropped: 0,
             sent: 0,
+            max_queued: MAX_QUEUED,
         })
+    }
+
+    /// Lets clients that connect from now on queue a message of `bytes`
+    /// beside the usual [`MAX_QUEUED`] (the visual meshes, sent once).
+    pub fn allow_message(&mut self, bytes: usize) {
+        self.max_queued = self.max_queued.max(MAX_QUEUED + bytes + 64);
     }
 
     pub fn local_addr(&self) -> io::Result<SocketAddr> {
@@ -199,7 +211,7 @@ impl Live {
             );
             Ok(resp)
         };
-        let config = WebSocketConfig::default().max_write_buffer_size(MAX_QUEUED);
+        let config = WebSocketConfig::default().max_write_buffer_size(self.max_queued);
         let mut ws = tungstenite::accept_hdr_with_config(stream, choose, Some(config))
             .map_err(|e| e.to_string())?;
         for text in [&self.info, &self.advertise] {
@@ -291,7 +303,14 @@ fn read_requests(
     loop {
         match c.ws.read() {
             Ok(Message::Text(text)) => {
-                if let Err(why) = request(c, channels, text.as_str()) {
+                let before: Vec<u32> = c.subscriptions.values().copied().collect();
+                let result = request(c, channels, text.as_str());
+                for &ch in c.subscriptions.values() {
+                    if !before.contains(&ch) {
+                        events.push(Event::Subscribed(c.peer, ch));
+                    }
+                }
+                if let Err(why) = result {
                     events.push(Event::BadRequest(c.peer, why.clone()));
                     let status = json!({ "op": "status", "level": 2, "message": why }).to_string();
                     if matches!(queue(c, Message::text(status)), Queued::Gone) {

@@ -31,6 +31,9 @@ fn fail(e: impl fmt::Display) -> RecordError {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Written {
     pub messages: BTreeMap<String, u64>,
+    /// What the recording leaves out, each said (a visual mesh that could
+    /// not be read).
+    pub not_drawn: Vec<String>,
 }
 
 /// An open recording.
@@ -110,6 +113,16 @@ impl Recording {
         self.w
             .write_to_known_channel(&header, msg.to_string().as_bytes())
             .map_err(fail)
+    }
+
+    /// What has been written so far.
+    pub fn written(&self) -> &Written {
+        &self.written
+    }
+
+    /// Says that `what` is not in the recording.
+    pub fn not_drawn(&mut self, what: impl IntoIterator<Item = String>) {
+        self.written.not_drawn.extend(what);
     }
 
     /// Writes the summary and closes the file.

@@ -236,3 +236,155 @@ fn boxes_and_capsules_are_drawn_with_their_contacts_at_the_corners() {
         "arrows at the slider's corners {corners:?}"
     );
 }
+
+/// A pose of a Foxglove message (position, orientation x y z w).
+fn pose_of(v: &serde_json::Value) -> nalgebra::Isometry3<f64> {
+    let n = |x: &serde_json::Value| x.as_f64().expect("a number");
+    let (p, q) = (&v["position"], &v["orientation"]);
+    nalgebra::Isometry3::from_parts(
+        nalgebra::Translation3::new(n(&p["x"]), n(&p["y"]), n(&p["z"])),
+        nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+            n(&q["w"]),
+            n(&q["x"]),
+            n(&q["y"]),
+            n(&q["z"]),
+        )),
+    )
+}
+
+/// The box bounding `points`: (lower corner, upper corner).
+fn bounds(points: impl Iterator<Item = nalgebra::Point3<f64>>) -> ([f64; 3], [f64; 3]) {
+    let mut b = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in points {
+        for k in 0..3 {
+            b.0[k] = b.0[k].min(p[k]);
+            b.1[k] = b.1[k].max(p[k]);
+        }
+    }
+    b
+}
+
+/// Issue 45, point 7: a robot's recording draws its visual meshes. The
+/// Panda of example-robot-data (COLLADA visuals, STL collision meshes) run
+/// with --mcap; read back with the `mcap` package: `/visuals` and
+/// `/shapes` once, at the first state's time, each body's entity locked
+/// to its frame; every embedded model is its URDF mesh file byte for byte
+/// with COLLADA's media type; and, placed by the first `/tf` and its
+/// entity's pose, each link's visual mesh (read by `mesh-loader`, not by
+/// us) spans the same box as its collision hull to within 1 cm (the
+/// Panda's collision meshes are coarse hulls of its visual ones: a visual
+/// mesh left at the link's origin instead of its centre of mass would be
+/// off by up to 8 cm).
+#[test]
+fn a_robots_recording_draws_its_visual_meshes_where_its_links_are() {
+    let robots = common::robot_data();
+    let urdf = robots.join("panda_description/urdf/panda.urdf");
+    let tmp = TempDir::new("mcap-visuals");
+    let out = tmp.path().join("run");
+    let status = Command::new(BIN)
+        .arg("run")
+        .arg(&urdf)
+        .args(["--floor", "--steps", "20", "--mcap", "--quiet", "--out"])
+        .arg(&out)
+        .status()
+        .expect("cosim-server");
+    assert!(status.success());
+    let recording = out.join("recording.mcap");
+    let v = common::python_json(
+        "read_visuals.py",
+        &[recording.as_os_str(), tmp.path().as_os_str()],
+    );
+    let scene = cosim_shared::Scene::load(&out.join("scene.toml")).expect("the run's scene");
+    assert_eq!(v["counts"]["/visuals"], 1);
+    assert_eq!(v["counts"]["/shapes"], 1);
+    assert_eq!(v["counts"]["/scene"], 21);
+    let tf_time = v["tf_time"].as_u64().expect("a /tf");
+    let frames: std::collections::HashMap<String, nalgebra::Isometry3<f64>> = v["tf"]
+        .as_array()
+        .expect("transforms")
+        .iter()
+        .map(|t| {
+            let pose =
+                serde_json::json!({ "position": t["translation"], "orientation": t["rotation"] });
+            (
+                t["child_frame_id"].as_str().expect("a frame").to_string(),
+                pose_of(&pose),
+            )
+        })
+        .collect();
+    let entities = |topic: &str| {
+        assert_eq!(v["once"][topic]["log_time"].as_u64(), Some(tf_time));
+        v["once"][topic]["entities"]
+            .as_array()
+            .expect("entities")
+            .clone()
+    };
+    let visuals = entities("/visuals");
+    let hulls = entities("/shapes");
+    let mut compared = 0;
+    let mut worst = (0.0f64, String::new());
+    for e in &visuals {
+        let body = e["frame_id"].as_str().expect("a frame id");
+        assert_eq!(e["frame_locked"], true);
+        let desc = scene
+            .bodies
+            .iter()
+            .find(|b| b.name == body)
+            .expect("a body of the scene");
+        let models = e["models"].as_array().expect("models");
+        assert_eq!(models.len(), desc.visual.len(), "{body}");
+        let frame = frames[body];
+        let mut points = Vec::new();
+        for (m, want) in models.iter().zip(&desc.visual) {
+            assert_eq!(m["media_type"], "model/vnd.collada+xml");
+            let file = m["data"].as_str().expect("the decoded file");
+            let sent = std::fs::read(file).expect("the decoded model");
+            let original = std::fs::read(want.mesh.as_deref().expect("a mesh")).expect("the mesh");
+            assert!(
+                sent == original,
+                "{body}: the embedded model is not its file"
+            );
+            let mesh = mesh_loader::Loader::default()
+                .load(file)
+                .expect("mesh-loader reads it");
+            let at = frame * pose_of(&m["pose"]);
+            let s = &m["scale"];
+            let scale = [&s["x"], &s["y"], &s["z"]].map(|x| x.as_f64().expect("a number"));
+            for mm in &mesh.meshes {
+                points.extend(mm.vertices.iter().map(|p| {
+                    at * nalgebra::Point3::new(
+                        p[0] as f64 * scale[0],
+                        p[1] as f64 * scale[1],
+                        p[2] as f64 * scale[2],
+                    )
+                }));
+            }
+        }
+        let Some(hull) = hulls.iter().find(|h| h["frame_id"] == body) else {
+            continue;
+        };
+        let mut hull_points = Vec::new();
+        for t in hull["triangles"].as_array().expect("triangles") {
+            let at = frame * pose_of(&t["pose"]);
+            for p in t["points"].as_array().expect("points") {
+                let n = |k: &str| p[k].as_f64().expect("a number");
+                hull_points.push(at * nalgebra::Point3::new(n("x"), n("y"), n("z")));
+            }
+        }
+        let (a, b) = (bounds(points.into_iter()), bounds(hull_points.into_iter()));
+        for k in 0..3 {
+            for d in [(a.0[k] - b.0[k]).abs(), (a.1[k] - b.1[k]).abs()] {
+                if d > worst.0 {
+                    worst = (d, format!("{body} axis {k}"));
+                }
+            }
+        }
+        compared += 1;
+    }
+    eprintln!(
+        "{compared} links compared; worst box difference {:.4} m ({})",
+        worst.0, worst.1
+    );
+    assert!(compared >= 8, "{compared} links compared");
+    assert!(worst.0 < 0.01, "{worst:?}");
+}

@@ -91,7 +91,31 @@ def compile_file(path):
                 "range": m.jnt_range[j].tolist() if m.jnt_limited[j] else None,
             }
         )
-    return {"bodies": bodies, "joints": joints, "timestep": m.opt.timestep,
+    # The geoms MuJoCo's viewer draws by default (groups 0 to 2) on bodies
+    # other than the world: their type, size, colour and world pose (a
+    # mesh's frame is MuJoCo's re-centred one: type and colour only).
+    names = {2: "sphere", 3: "capsule", 4: "ellipsoid", 5: "cylinder", 6: "box", 7: "mesh"}
+    geoms = []
+    for g in range(m.ngeom):
+        kind = names.get(int(m.geom_type[g]))
+        if m.geom_bodyid[g] == 0 or kind is None or not 0 <= m.geom_group[g] <= 2:
+            continue
+        geoms.append(
+            {
+                "type": kind,
+                "size": m.geom_size[g].tolist(),
+                # As MuJoCo draws it: the material's colour unless the
+                # geom's differs from the default grey.
+                "rgba": (
+                    m.mat_rgba[m.geom_matid[g]]
+                    if m.geom_matid[g] >= 0 and np.allclose(m.geom_rgba[g], [0.5, 0.5, 0.5, 1])
+                    else m.geom_rgba[g]
+                ).tolist(),
+                "pos": d.geom_xpos[g].tolist(),
+                "mat": d.geom_xmat[g].reshape(3, 3).tolist(),
+            }
+        )
+    return {"bodies": bodies, "joints": joints, "geoms": geoms, "timestep": m.opt.timestep,
             "gravity": m.opt.gravity.tolist()}
 
 

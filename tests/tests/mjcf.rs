@@ -263,6 +263,122 @@ fn compare(imported: &Imported, mj: &Value) -> (f64, String, usize, usize) {
     (worst.0, worst.1, bodies, joints)
 }
 
+/// The visuals against MuJoCo's geoms (those its viewer draws): as many
+/// of each type, each of MuJoCo's matched by one of ours of its type at
+/// its world position (1e-9 m) with its size (1e-9 relative), colour
+/// (1e-6: MuJoCo keeps colours in single precision) and world axes
+/// (1e-9); a mesh by type and colour (MuJoCo re-centres its frame). The
+/// worst difference and what; the visuals compared.
+fn compare_visuals(imported: &Imported, mj: &Value) -> (f64, String, usize) {
+    use cosim_shared::VisualKind;
+    let scene = &imported.scene;
+    // Type, world position, world axes, size, colour.
+    type Look = (String, Vector3<f64>, Matrix3<f64>, Vec<f64>, [f64; 4]);
+    let mut ours: Vec<Look> = Vec::new();
+    for b in &scene.bodies {
+        let [w, x, y, z] = b.orientation;
+        let r = UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z));
+        for v in &b.visual {
+            let [w, x, y, z] = v.orientation;
+            let q = r * UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z));
+            let kind = match v.kind {
+                VisualKind::Mesh => "mesh",
+                VisualKind::Box => "box",
+                VisualKind::Sphere => "sphere",
+                VisualKind::Cylinder => "cylinder",
+                VisualKind::Capsule => "capsule",
+                VisualKind::Ellipsoid => "ellipsoid",
+            };
+            ours.push((
+                kind.to_string(),
+                Vector3::from(b.position) + r * Vector3::from(v.position),
+                *q.to_rotation_matrix().matrix(),
+                v.size.clone(),
+                v.color.unwrap_or([f64::NAN; 4]),
+            ));
+        }
+    }
+    let theirs = mj["geoms"].as_array().expect("geoms");
+    if theirs.len() != ours.len() {
+        return (
+            f64::INFINITY,
+            format!(
+                "{} visuals against MuJoCo's {} geoms",
+                ours.len(),
+                theirs.len()
+            ),
+            ours.len(),
+        );
+    }
+    let mut worst = (0.0f64, String::new());
+    let mut taken = vec![false; ours.len()];
+    for (k, g) in theirs.iter().enumerate() {
+        let kind = g["type"].as_str().expect("a type");
+        let rgba: Vec<f64> = g["rgba"]
+            .as_array()
+            .expect("rgba")
+            .iter()
+            .map(|x| x.as_f64().expect("a number"))
+            .collect();
+        let size = v3(&g["size"]);
+        let (pos, mat) = (v3(&g["pos"]), m3(&g["mat"]));
+        // The closest of ours of its type not yet taken.
+        let best = (0..ours.len())
+            .filter(|&i| !taken[i] && ours[i].0 == kind)
+            .map(|i| {
+                let o = &ours[i];
+                let colour = (0..4).map(|c| (o.4[c] - rgba[c]).abs()).fold(0.0, f64::max) / 1e-6;
+                let d = if kind == "mesh" {
+                    colour
+                } else {
+                    let n = o.3.len();
+                    let sizes = (0..n)
+                        .map(|c| (o.3[c] - size[c]).abs() / size[c])
+                        .fold(0.0, f64::max)
+                        / 1e-9;
+                    let place = (o.1 - pos).norm() / 1e-9;
+                    // Axes: a sphere's do not matter; a capsule's and a
+                    // cylinder's z only.
+                    let axes = match kind {
+                        "sphere" => 0.0,
+                        // Either way along z (fromto's direction).
+                        "capsule" | "cylinder" => {
+                            let (a, b) = (o.2.column(2), mat.column(2));
+                            (a - b).norm().min((a + b).norm()) / 1e-9
+                        }
+                        _ => (o.2 - mat).norm() / 1e-9,
+                    };
+                    colour.max(sizes).max(place).max(axes)
+                };
+                (i, if d.is_nan() { f64::INFINITY } else { d })
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        match best {
+            Some((i, d)) => {
+                taken[i] = true;
+                if d * 1e-9 > worst.0 {
+                    let o = &ours[i];
+                    worst = (
+                        d * 1e-9,
+                        format!(
+                            "geom {k} ({kind}): ours at {:?} size {:?} rgba {:?}, MuJoCo's at {:?} size {:?} rgba {rgba:?}",
+                            o.1.as_slice(), o.3, o.4, pos.as_slice(), size.as_slice()
+                        ),
+                    );
+                }
+            }
+            None => {
+                return (
+                    f64::INFINITY,
+                    format!("geom {k} ({kind}): no visual"),
+                    ours.len(),
+                )
+            }
+        }
+    }
+    (worst.0, worst.1, ours.len())
+}
+
 /// Every file of the corpus that MuJoCo compiles is imported, and its
 /// masses, inertias and joints agree with MuJoCo's to 1e-9 relative.
 #[test]
@@ -289,11 +405,16 @@ fn mjcf_masses_and_joints_agree_with_mujocos_compiler() {
             Err(e) => bad.push(format!("{short}: refused: {e}")),
             Ok(imported) => {
                 let (worst, what, bodies, joints) = compare(&imported, mj);
+                let (v_worst, v_what, visuals) = compare_visuals(&imported, mj);
                 report.push(format!(
-                    "{short}: {bodies} bodies, {joints} joints, worst {worst:.1e} ({what})"
+                    "{short}: {bodies} bodies, {joints} joints, worst {worst:.1e} ({what}); \
+                     {visuals} visuals, worst {v_worst:.1e} ({v_what})"
                 ));
                 if worst.is_nan() || worst > 1e-9 {
                     bad.push(format!("{short}: {what}: {worst:.2e}"));
+                }
+                if v_worst.is_nan() || v_worst > 1e-9 {
+                    bad.push(format!("{short}: {v_what}: {v_worst:.2e}"));
                 }
             }
         }

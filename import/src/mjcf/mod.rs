@@ -44,7 +44,8 @@ use crate::options::{Imported, Options};
 use crate::problems::Problems;
 use cosim_shared::scene::{MotorDesc, MIN_MOMENT};
 use cosim_shared::{
-    BodyDesc, JointDesc, JointKind as Kind, PlaneDesc, Scene, SceneError, ShapeEntry, WORLD,
+    BodyDesc, JointDesc, JointKind as Kind, PlaneDesc, Scene, SceneError, ShapeEntry, VisualEntry,
+    VisualKind, WORLD,
 };
 use mass::Mass;
 use nalgebra::{Isometry3, Matrix3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -489,10 +490,15 @@ impl Builder<'_> {
             };
             let pose = Isometry3::from_parts(Translation3::from(com), turn);
             let mut shapes = Vec::new();
+            let mut visual = Vec::new();
             let mut friction: f64 = 0.0;
             for &b in &members {
-                for g in m.bodies[b].geoms.iter().filter(|g| collides(g)) {
+                for g in &m.bodies[b].geoms {
                     let at = pose.inverse() * placed.frame[b] * g.pose;
+                    visual.extend(self.visual(g, &at));
+                    if !collides(g) {
+                        continue;
+                    }
                     if let Some(entry) = self.shape(g, &at, &hulls) {
                         shapes.push(entry);
                         friction = friction.max(g.friction);
@@ -523,6 +529,7 @@ impl Builder<'_> {
                 force: [0.0; 3],
                 group: (!self_collision).then(|| group_name.clone()),
                 shape: shapes,
+                visual,
             };
             if desc.shape.is_empty() && desc.inertia.is_none() {
                 desc.inertia = Some(six(&Matrix3::identity()));
@@ -621,6 +628,7 @@ impl Builder<'_> {
                         force: [0.0; 3],
                         group: None,
                         shape: Vec::new(),
+                        visual: Vec::new(),
                     });
                     v
                 };
@@ -709,6 +717,58 @@ impl Builder<'_> {
     }
 
     /// Every mesh's hull points (in the mesh's frame, scaled) and solid.
+    /// Where mesh asset `i`'s file is: under the compiler's `meshdir`,
+    /// relative to the main file's folder.
+    fn mesh_path(&self, i: usize) -> std::path::PathBuf {
+        let m = self.m;
+        let base = match (&m.compiler.meshdir, self.dir) {
+            (Some(d), Some(dir)) => dir.join(d),
+            (Some(d), None) => Path::new(d).to_path_buf(),
+            (None, Some(dir)) => dir.to_path_buf(),
+            (None, None) => Path::new(".").to_path_buf(),
+        };
+        base.join(&m.meshes[i].file)
+    }
+
+    /// How geom `g` at `at` in its body's frame looks: MuJoCo draws every
+    /// geom of the groups its viewer shows by default (0, 1 and 2),
+    /// meshes as their files (not their hulls); planes of moving bodies
+    /// and heightfields are not drawn.
+    fn visual(&self, g: &read::Geom, at: &Isometry3<f64>) -> Option<VisualEntry> {
+        if !(0..=2).contains(&g.group) {
+            return None;
+        }
+        let [a, b, c] = g.size;
+        let (kind, size, mesh, scale) = match g.kind {
+            GeomKind::Sphere => (VisualKind::Sphere, vec![a], None, [1.0; 3]),
+            GeomKind::Capsule => (VisualKind::Capsule, vec![a, b], None, [1.0; 3]),
+            GeomKind::Cylinder => (VisualKind::Cylinder, vec![a, b], None, [1.0; 3]),
+            GeomKind::Box => (VisualKind::Box, vec![a, b, c], None, [1.0; 3]),
+            GeomKind::Ellipsoid => (VisualKind::Ellipsoid, vec![a, b, c], None, [1.0; 3]),
+            GeomKind::Mesh(i) => {
+                let path = self.mesh_path(i);
+                let path = std::path::absolute(&path).unwrap_or(path);
+                let scale = self.m.meshes[i].scale;
+                (
+                    VisualKind::Mesh,
+                    Vec::new(),
+                    Some(path.to_string_lossy().into_owned()),
+                    scale,
+                )
+            }
+            GeomKind::Plane | GeomKind::Other(_) => return None,
+        };
+        Some(VisualEntry {
+            kind,
+            mesh,
+            scale,
+            size,
+            position: at.translation.vector.into(),
+            orientation: [at.rotation.w, at.rotation.i, at.rotation.j, at.rotation.k],
+            color: Some(g.rgba.map(|x| x.clamp(0.0, 1.0))),
+        })
+    }
+
     fn hulls(&mut self) -> HashMap<usize, (Vec<[f64; 3]>, Option<Mass>)> {
         let m = self.m;
         let mut out = HashMap::new();
@@ -724,13 +784,7 @@ impl Builder<'_> {
         let mut meshes = crate::mesh::Meshes::default();
         for i in used {
             let asset = &m.meshes[i];
-            let base = match (&m.compiler.meshdir, self.dir) {
-                (Some(d), Some(dir)) => dir.join(d),
-                (Some(d), None) => Path::new(d).to_path_buf(),
-                (None, Some(dir)) => dir.to_path_buf(),
-                (None, None) => Path::new(".").to_path_buf(),
-            };
-            let path = base.join(&asset.file);
+            let path = self.mesh_path(i);
             match meshes.solid(&path, asset.scale) {
                 Ok((points, solid)) => {
                     out.insert(i, (points, solid));

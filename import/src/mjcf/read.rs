@@ -41,6 +41,8 @@ pub struct Model {
     /// Index 0 is the world.
     pub bodies: Vec<Body>,
     pub meshes: Vec<MeshAsset>,
+    /// `<material>` colours by name (`rgba`; textures are not read).
+    pub materials: std::collections::HashMap<String, [f64; 4]>,
     pub actuators: Vec<Actuator>,
     /// `<contact><exclude body1 body2>`: pairs of body names.
     pub excludes: Vec<(String, String, u32)>,
@@ -102,6 +104,8 @@ pub struct Geom {
     pub mass: Option<f64>,
     pub density: f64,
     pub group: i64,
+    /// The colour drawn: `rgba`, else its material's, else MuJoCo's grey.
+    pub rgba: [f64; 4],
     pub contype: i64,
     pub conaffinity: i64,
     /// Sliding friction.
@@ -210,6 +214,7 @@ pub fn model(tree: &Tree, problems: &mut Problems) -> Model {
             label: "<worldbody>".into(),
         }],
         meshes: Vec::new(),
+        materials: std::collections::HashMap::new(),
         actuators: Vec::new(),
         excludes: Vec::new(),
         equalities: Vec::new(),
@@ -226,6 +231,14 @@ pub fn model(tree: &Tree, problems: &mut Problems) -> Model {
         }
     }
     for a in root.all("asset") {
+        for mat in a.all("material") {
+            let cls = r.class(mat, "main");
+            if let Some(name) = mat.attr("name") {
+                let c = r.vec(mat, &cls, "rgba", 4).unwrap_or(vec![1.0; 4]);
+                m.materials
+                    .insert(name.to_string(), [c[0], c[1], c[2], c[3]]);
+            }
+        }
         for mesh in a.all("mesh") {
             let cls = r.class(mesh, "main");
             let Some(file) = mesh.attr("file") else {
@@ -711,6 +724,15 @@ impl Reader<'_> {
             mass: self.num(el, cls, "mass"),
             density: self.num(el, cls, "density").unwrap_or(1000.0),
             group: int(self, "group", 0),
+            rgba: match (
+                self.vec(el, cls, "rgba", 4),
+                self.get(el, cls, "material")
+                    .and_then(|n| m.materials.get(n)),
+            ) {
+                (Some(c), _) => [c[0], c[1], c[2], c[3]],
+                (None, Some(c)) => *c,
+                (None, None) => [0.5, 0.5, 0.5, 1.0],
+            },
             contype: int(self, "contype", 1),
             conaffinity: int(self, "conaffinity", 1),
             friction: friction.map_or(1.0, |f| f[0]),

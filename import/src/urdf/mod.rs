@@ -62,7 +62,11 @@ pub fn import(
 ) -> Result<Imported, SceneError> {
     let mut problems = Problems::new(file);
     let robot = read::robot(text, &mut problems);
-    let mut notes = Vec::new();
+    let mut notes: Vec<String> = robot
+        .visual_problems
+        .iter()
+        .map(|p| format!("{p}: not drawn"))
+        .collect();
     let start = starts(&robot, &options.positions, &mut problems);
     let tree = Tree::new(&robot, &start, &mut problems);
     let mut s = format!(
@@ -412,6 +416,19 @@ impl Tree {
                     );
                 }
             }
+            for l in self.members(g) {
+                for v in &links[l].visuals {
+                    let pose = at.inverse() * self.frame[l] * v.origin;
+                    if let Some(text) = visual_text(v, robot, &links[l].name, dir, notes) {
+                        let _ = write!(
+                            s,
+                            "[[body.visual]]\n{text}position = {}\norientation = {}\n",
+                            v3(&pose.translation.vector),
+                            quat(&pose.rotation)
+                        );
+                    }
+                }
+            }
             s.push('\n');
             // The root held by the world, or fixed by the options.
             if g == self.root && (held || options.fixed_base) {
@@ -697,6 +714,68 @@ impl Support {
 
 /// A collision's shape as scene keys and its support, or `None` (with a
 /// problem) for what is not read.
+/// A `<visual>` as a `[[body.visual]]`'s type, size or file, scale and
+/// colour; `None` (said) when its mesh cannot be found.
+fn visual_text(
+    v: &read::Visual,
+    robot: &read::Robot,
+    link: &str,
+    dir: Option<&Path>,
+    notes: &mut Vec<String>,
+) -> Option<String> {
+    let mut t = match &v.geometry {
+        Geometry::Sphere(r) => format!("type = \"sphere\"\nsize = [{r:?}]\n"),
+        Geometry::Box(size) => {
+            let h = size.map(|x| x / 2.0);
+            format!(
+                "type = \"box\"\nsize = [{:?}, {:?}, {:?}]\n",
+                h[0], h[1], h[2]
+            )
+        }
+        Geometry::Cylinder { radius, length } => {
+            format!(
+                "type = \"cylinder\"\nsize = [{radius:?}, {:?}]\n",
+                length / 2.0
+            )
+        }
+        Geometry::Capsule { radius, length } => {
+            format!(
+                "type = \"capsule\"\nsize = [{radius:?}, {:?}]\n",
+                length / 2.0
+            )
+        }
+        Geometry::Mesh { filename, scale } => match package::resolve(filename, dir) {
+            Ok(path) => {
+                let path = std::path::absolute(&path).unwrap_or(path);
+                format!(
+                    "type = \"mesh\"\nmesh = {:?}\nscale = {}\n",
+                    path.to_string_lossy(),
+                    v3(&Vector3::from(*scale))
+                )
+            }
+            Err(e) => {
+                notes.push(format!(
+                    "link {link:?}: the visual mesh {filename:?} is not drawn: {e}"
+                ));
+                return None;
+            }
+        },
+    };
+    let color = v.rgba.or_else(|| {
+        v.material
+            .as_ref()
+            .and_then(|m| robot.materials.get(m).copied())
+    });
+    if let Some(c) = color {
+        let _ = writeln!(
+            t,
+            "color = [{:?}, {:?}, {:?}, {:?}]",
+            c[0], c[1], c[2], c[3]
+        );
+    }
+    Some(t)
+}
+
 fn shape_text(
     c: &read::Collision,
     link: &str,

@@ -19,6 +19,17 @@ pub struct Link {
     /// `[ixx, iyy, izz, ixy, ixz, iyz]` about its origin in its axes.
     pub inertial: Option<Inertial>,
     pub collisions: Vec<Collision>,
+    pub visuals: Vec<Visual>,
+}
+
+/// A `<visual>`: drawn, never collided.
+#[derive(Debug, Clone)]
+pub struct Visual {
+    pub origin: Isometry3<f64>,
+    pub geometry: Geometry,
+    /// Its `<material>`: a colour of its own, or the name of the robot's.
+    pub rgba: Option<[f64; 4]>,
+    pub material: Option<String>,
 }
 
 #[derive(Debug, Clone)]
@@ -94,6 +105,11 @@ pub struct Robot {
     pub name: String,
     pub links: Vec<Link>,
     pub joints: Vec<Joint>,
+    /// The robot's named `<material>` colours.
+    pub materials: std::collections::HashMap<String, [f64; 4]>,
+    /// What could not be read of the `<visual>`s (drawn only, so said,
+    /// not refused: PyBullet loads such files), with its line.
+    pub visual_problems: Vec<String>,
 }
 
 /// Reads `text`; what cannot be read goes to `problems`.
@@ -124,9 +140,21 @@ pub fn robot(text: &str, problems: &mut Problems) -> Robot {
     };
     for node in root.children().filter(Node::is_element) {
         match node.tag_name().name() {
-            "link" => robot.links.extend(r.link(node)),
+            "link" => {
+                let mut visual = Problems::new("");
+                let link = r.link(node, &mut visual);
+                robot
+                    .visual_problems
+                    .extend(visual.list.iter().map(|p| p.to_string()));
+                robot.links.extend(link);
+            }
             "joint" => robot.joints.extend(r.joint(node)),
-            // Materials, transmissions, Gazebo's and others' extensions:
+            "material" => {
+                if let (Some(name), Some(c)) = (node.attribute("name"), rgba(node)) {
+                    robot.materials.insert(name.to_string(), c);
+                }
+            }
+            // Transmissions, Gazebo's and others' extensions:
             // nothing of the rigid bodies.
             _ => {}
         }
@@ -137,6 +165,17 @@ pub fn robot(text: &str, problems: &mut Problems) -> Robot {
 struct Reader<'a, 'p> {
     doc: &'a roxmltree::Document<'a>,
     problems: &'p mut Problems,
+}
+
+/// A `<material>`'s `<color rgba>`, when it has one that reads.
+fn rgba(material: Node) -> Option<[f64; 4]> {
+    let text = child(material, "color")?.attribute("rgba")?;
+    let v: Vec<f64> = text
+        .split_whitespace()
+        .map(|w| w.parse::<f64>().ok().filter(|x| x.is_finite()))
+        .collect::<Option<_>>()?;
+    let c: [f64; 4] = v.try_into().ok()?;
+    Some(c.map(|x| x.clamp(0.0, 1.0)))
 }
 
 fn child<'a, 'i>(node: Node<'a, 'i>, tag: &str) -> Option<Node<'a, 'i>> {
@@ -218,7 +257,8 @@ impl Reader<'_, '_> {
         }
     }
 
-    fn link(&mut self, node: Node) -> Option<Link> {
+    /// A `<link>`; its `<visual>`s' problems go to `visual`.
+    fn link(&mut self, node: Node, visual: &mut Problems) -> Option<Link> {
         let name = self.name(node, "link")?;
         let what = format!("link {name:?}");
         let inertial = child(node, "inertial").map(|i| {
@@ -255,11 +295,35 @@ impl Reader<'_, '_> {
                 });
             }
         }
+        let mut visuals = Vec::new();
+        for (k, v) in node
+            .children()
+            .filter(|c| c.is_element() && c.tag_name().name() == "visual")
+            .enumerate()
+        {
+            let w = format!("{what} <visual> {}", k + 1);
+            // Read with the visual's own problem list (said, not refused).
+            let mut sub = Reader {
+                doc: self.doc,
+                problems: &mut *visual,
+            };
+            let origin = sub.origin(v, &w);
+            let material = child(v, "material");
+            if let Some(geometry) = sub.geometry(v, &w) {
+                visuals.push(Visual {
+                    origin,
+                    geometry,
+                    rgba: material.and_then(rgba),
+                    material: material.and_then(|m| m.attribute("name").map(str::to_string)),
+                });
+            }
+        }
         Some(Link {
             name,
             line: self.line(node),
             inertial,
             collisions,
+            visuals,
         })
     }
 

@@ -198,6 +198,9 @@ fn record(dir: &std::path::Path, quiet: bool) -> Result<(), ExitCode> {
                     w.messages.len()
                 );
             }
+            for what in &w.not_drawn {
+                eprintln!("warning: the recording does not draw {what}");
+            }
             Ok(())
         }
         Err(e) => {

@@ -31,18 +31,51 @@ impl Drop for TempDir {
 // Not every test binary that shares this module reads recordings.
 #[allow(dead_code)]
 pub fn read_mcap(path: &Path, log_time: u64, contact: &str) -> serde_json::Value {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/read_mcap.py");
+    python_json(
+        "read_mcap.py",
+        &[
+            path.as_os_str(),
+            log_time.to_string().as_ref(),
+            contact.as_ref(),
+        ],
+    )
+}
+
+/// What `server/tests/SCRIPT ARGS...` prints, as JSON.
+// Not every test binary that shares this module runs a script.
+#[allow(dead_code)]
+pub fn python_json(script: &str, args: &[&std::ffi::OsStr]) -> serde_json::Value {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests")
+        .join(script);
     let read = std::process::Command::new("python3")
-        .arg(script)
-        .arg(path)
-        .arg(log_time.to_string())
-        .arg(contact)
+        .arg(&script)
+        .args(args)
         .output()
         .expect("python3");
     assert!(
         read.status.success(),
-        "{}",
+        "{}: {}",
+        script.display(),
         String::from_utf8_lossy(&read.stderr)
     );
-    serde_json::from_slice(&read.stdout).expect("read_mcap.py prints JSON")
+    serde_json::from_slice(&read.stdout).expect("the script prints JSON")
+}
+
+/// example-robot-data's robots folder (scripts/robot-data.sh downloads the
+/// package once into target/robot-data).
+// Not every test binary that shares this module runs robots.
+#[allow(dead_code)]
+pub fn robot_data() -> std::path::PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let fetched = std::process::Command::new("bash")
+        .arg(root.join("scripts/robot-data.sh"))
+        .output()
+        .expect("bash scripts/robot-data.sh");
+    assert!(
+        fetched.status.success(),
+        "{}",
+        String::from_utf8_lossy(&fetched.stderr)
+    );
+    std::path::PathBuf::from(String::from_utf8_lossy(&fetched.stdout).trim())
 }

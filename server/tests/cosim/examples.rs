@@ -294,15 +294,7 @@ fn a_box_pushed_by_body_impulses_stops_at_its_target_rust_and_python() {
 #[test]
 fn a_python_posture_controller_stands_go1_up() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let fetched = Command::new("bash")
-        .arg(root.join("scripts/robot-data.sh"))
-        .output()
-        .expect("bash scripts/robot-data.sh");
-    assert!(
-        fetched.status.success(),
-        "{}",
-        String::from_utf8_lossy(&fetched.stderr)
-    );
+    common::robot_data();
     let scene = root.join("examples/robots/go1_stand.toml");
     let scene = scene.to_str().expect("a UTF-8 path");
     let (server, dir, name) =

@@ -47,6 +47,10 @@ pub struct BodyDesc {
     /// frame, a sensor: it needs `inertia`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub shape: Vec<ShapeEntry>,
+    /// `[[body.visual]]`: how the body looks where that is not its shapes
+    /// (a robot's visual meshes); drawn, never collided.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub visual: Vec<super::VisualEntry>,
 }
 
 /// `[[body.shape]]`: one of a body's shapes, a sphere (`radius`), capsule

@@ -11,12 +11,14 @@ mod joint;
 mod robot;
 mod sim;
 mod validate;
+mod visual;
 
 pub use body::*;
 pub use joint::*;
 pub use robot::*;
 pub use sim::*;
 pub use validate::MIN_MOMENT;
+pub use visual::*;
 
 use serde::{Deserialize, Serialize};
 use std::fmt;

@@ -94,3 +94,43 @@ fn an_inertia_with_a_vanishing_moment_is_refused() {
     );
     Scene::parse(&fine, "t.toml").expect("a 1 g part's inertia");
 }
+
+/// A body's looks are checked and named like its shapes: a mesh needs its
+/// file, a size its count of positive numbers, a colour 0..1; a good one
+/// reads back as written.
+#[test]
+fn a_visuals_problems_are_named() {
+    let with = |v: &str| format!("{MINIMAL}[[body.visual]]\n{v}\n");
+    let cases = [
+        ("type = \"mesh\"", "body \"ball\".visual[0].mesh"),
+        (
+            "type = \"box\"\nsize = [0.1, 0.2]",
+            "body \"ball\".visual[0].size",
+        ),
+        (
+            "type = \"sphere\"\nsize = [-1.0]",
+            "body \"ball\".visual[0].size",
+        ),
+        (
+            "type = \"sphere\"\nsize = [0.1]\ncolor = [2.0, 0.0, 0.0, 1.0]",
+            "body \"ball\".visual[0].color",
+        ),
+        (
+            "type = \"sphere\"\nsize = [0.1]\norientation = [2.0, 0.0, 0.0, 0.0]",
+            "body \"ball\".visual[0].orientation",
+        ),
+    ];
+    for (v, field) in cases {
+        let e = Scene::parse(&with(v), "t.toml").unwrap_err();
+        assert_eq!(e.field, field, "{v}: {e}");
+    }
+    let ok = Scene::parse(
+        &with("type = \"mesh\"\nmesh = \"a.stl\"\nscale = [0.001, 0.001, 0.001]"),
+        "t.toml",
+    )
+    .expect("a mesh visual");
+    let v = &ok.bodies[0].visual[0];
+    assert_eq!(v.kind, super::VisualKind::Mesh);
+    assert_eq!(v.mesh.as_deref(), Some("a.stl"));
+    assert_eq!(v.scale, [0.001; 3]);
+}

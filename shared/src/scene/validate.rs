@@ -127,6 +127,14 @@ impl Scene {
                 finite3(&e.position).map_err(|m| err(g("position"), m))?;
                 unit_quaternion(&e.orientation).map_err(|m| err(g("orientation"), m))?;
             }
+            for (k, v) in b.visual.iter().enumerate() {
+                let g = |key: &str| f(&format!("visual[{k}].{key}"));
+                if let Some((key, m)) = v.problem() {
+                    return Err(err(g(key), m));
+                }
+                finite3(&v.position).map_err(|m| err(g("position"), m))?;
+                unit_quaternion(&v.orientation).map_err(|m| err(g("orientation"), m))?;
+            }
             let shapes = b.shapes();
             let centred = shapes.iter().all(|p| p.centred());
             let hull = shapes
