@@ -772,10 +772,17 @@ impl Builder<'_> {
     fn hulls(&mut self) -> HashMap<usize, (Vec<[f64; 3]>, Option<Mass>)> {
         let m = self.m;
         let mut out = HashMap::new();
+        // Only meshes that collide or weigh: a visual mesh is drawn from
+        // its file, and the full hull of one (gymnasium-robotics' Panda:
+        // 10^5 vertices) took minutes.
+        let groups = m.compiler.groups;
         let used: std::collections::BTreeSet<usize> = m
             .bodies
             .iter()
             .flat_map(|b| &b.geoms)
+            .filter(|g| {
+                g.contype != 0 || g.conaffinity != 0 || (groups[0]..=groups[1]).contains(&g.group)
+            })
             .filter_map(|g| match g.kind {
                 GeomKind::Mesh(i) => Some(i),
                 _ => None,
