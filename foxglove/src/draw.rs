@@ -57,7 +57,7 @@ pub fn time(t: f64) -> Value {
     json!({ "sec": ns / 1_000_000_000, "nsec": ns % 1_000_000_000 })
 }
 
-fn vec3(v: &Vector3<f64>) -> Value {
+pub(crate) fn vec3(v: &Vector3<f64>) -> Value {
     json!({ "x": v.x, "y": v.y, "z": v.z })
 }
 
@@ -78,7 +78,7 @@ fn hull_triangles(shape: &ShapeDesc) -> Vec<[f64; 3]> {
 }
 
 /// A scene's quaternion `[w, x, y, z]`, normalised.
-fn quaternion(q: &[f64; 4]) -> UnitQuaternion<f64> {
+pub(crate) fn quaternion(q: &[f64; 4]) -> UnitQuaternion<f64> {
     UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
 }
 
@@ -86,7 +86,7 @@ fn quat(q: &UnitQuaternion<f64>) -> Value {
     json!({ "x": q.i, "y": q.j, "z": q.k, "w": q.w })
 }
 
-fn color(i: usize, alpha: f64) -> Value {
+pub(crate) fn color(i: usize, alpha: f64) -> Value {
     let [r, g, b] = palette::color(i);
     json!({ "r": r as f64 / 255.0, "g": g as f64 / 255.0, "b": b as f64 / 255.0, "a": alpha })
 }
@@ -95,7 +95,7 @@ fn grey(v: f64, alpha: f64) -> Value {
     json!({ "r": v, "g": v, "b": v, "a": alpha })
 }
 
-fn pose(p: &Vector3<f64>, q: &UnitQuaternion<f64>) -> Value {
+pub(crate) fn pose(p: &Vector3<f64>, q: &UnitQuaternion<f64>) -> Value {
     json!({ "position": vec3(p), "orientation": quat(q) })
 }
 
@@ -115,7 +115,7 @@ fn turn(from: &Vector3<f64>, to: &Vector3<f64>) -> UnitQuaternion<f64> {
 
 /// A scene entity with only the primitives given (Foxglove wants every
 /// list present).
-pub(crate) fn entity(stamp: &Value, id: &str, parts: &[(&str, Value)]) -> Value {
+fn entity(stamp: &Value, id: &str, parts: &[(&str, Value)]) -> Value {
     let mut e = json!({
         "timestamp": stamp, "frame_id": "world", "id": id,
         "lifetime": time(0.0), "frame_locked": false, "metadata": [],
@@ -125,6 +125,20 @@ pub(crate) fn entity(stamp: &Value, id: &str, parts: &[(&str, Value)]) -> Value 
     for (k, v) in parts {
         e[*k] = v.clone();
     }
+    e
+}
+
+/// [`entity`] in body `frame`'s frame, moving with it (`frame_locked`):
+/// drawn once, placed by each `/tf` after.
+pub(crate) fn locked_entity(
+    stamp: &Value,
+    id: &str,
+    frame: &str,
+    parts: &[(&str, Value)],
+) -> Value {
+    let mut e = entity(stamp, id, parts);
+    e["frame_id"] = json!(frame);
+    e["frame_locked"] = json!(true);
     e
 }
 
@@ -341,14 +355,12 @@ impl Drawing {
                                 "color": c, "colors": [], "indices": [] })
                     })
                     .collect();
-                let mut e = entity(
+                locked_entity(
                     &stamp,
                     &format!("hull/{}", self.names[b]),
+                    &self.names[b],
                     &[("triangles", Value::Array(triangles))],
-                );
-                e["frame_id"] = json!(self.names[b]);
-                e["frame_locked"] = json!(true);
-                e
+                )
             })
             .collect();
         (!entities.is_empty()).then(|| json!({ "deletions": [], "entities": entities }))

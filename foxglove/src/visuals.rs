@@ -6,9 +6,9 @@
 //! bytes and its media type: Foxglove's 3-D panel reads STL, OBJ, COLLADA
 //! and glTF), so their own colours and detail show.
 
-use crate::draw::{self, time};
+use crate::draw::{self, color, pose, quaternion, time, vec3};
 use cosim_shared::{Scene, VisualKind};
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 use serde_json::{json, Value};
 use std::collections::HashMap;
 use std::path::Path;
@@ -33,12 +33,6 @@ pub struct Visuals {
     /// `None` when no body has a visual.
     pub message: Option<Value>,
     pub not_drawn: Vec<String>,
-    /// Mesh bytes embedded, after base64.
-    pub bytes: usize,
-}
-
-fn vec3(v: &Vector3<f64>) -> Value {
-    json!({ "x": v.x, "y": v.y, "z": v.z })
 }
 
 fn rgba(c: [f64; 4]) -> Value {
@@ -49,27 +43,19 @@ fn rgba(c: [f64; 4]) -> Value {
 pub fn visuals(scene: &Scene) -> Visuals {
     let mut files: HashMap<&str, Result<String, String>> = HashMap::new();
     let mut not_drawn = Vec::new();
-    let mut bytes = 0;
     let mut entities = Vec::new();
     let stamp = time(0.0);
     for (b, body) in scene.bodies.iter().enumerate() {
         if body.visual.is_empty() {
             continue;
         }
-        let [r, g, bl] = crate::palette::color(b);
-        let own = [r as f64 / 255.0, g as f64 / 255.0, bl as f64 / 255.0, 1.0];
         let (mut models, mut cubes, mut spheres, mut cylinders) =
             (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (k, v) in body.visual.iter().enumerate() {
-            let q = UnitQuaternion::from_quaternion(Quaternion::new(
-                v.orientation[0],
-                v.orientation[1],
-                v.orientation[2],
-                v.orientation[3],
-            ));
+            let q = quaternion(&v.orientation);
             let x = Vector3::from(v.position);
-            let pose = |x: &Vector3<f64>| json!({ "position": vec3(x), "orientation": { "x": q.i, "y": q.j, "z": q.k, "w": q.w } });
-            let color = rgba(v.color.unwrap_or(own));
+            let pose = |x: &Vector3<f64>| pose(x, &q);
+            let color = v.color.map_or_else(|| color(b, 1.0), rgba);
             let s = &v.size;
             match v.kind {
                 VisualKind::Mesh => {
@@ -91,7 +77,6 @@ pub fn visuals(scene: &Scene) -> Visuals {
                     });
                     match data {
                         Ok(data) => {
-                            bytes += data.len();
                             // COLLADA and glTF carry their own materials,
                             // which RViz and Foxglove show; STL and OBJ
                             // take the given colour.
@@ -132,19 +117,21 @@ pub fn visuals(scene: &Scene) -> Visuals {
                 }
             }
         }
-        let mut e = draw::entity(&stamp, &format!("visual/{}", body.name), &[]);
-        e["frame_id"] = json!(body.name);
-        e["frame_locked"] = json!(true);
-        e["models"] = Value::Array(models);
-        e["cubes"] = Value::Array(cubes);
-        e["spheres"] = Value::Array(spheres);
-        e["cylinders"] = Value::Array(cylinders);
-        entities.push(e);
+        entities.push(draw::locked_entity(
+            &stamp,
+            &format!("visual/{}", body.name),
+            &body.name,
+            &[
+                ("models", Value::Array(models)),
+                ("cubes", Value::Array(cubes)),
+                ("spheres", Value::Array(spheres)),
+                ("cylinders", Value::Array(cylinders)),
+            ],
+        ));
     }
     Visuals {
         message: (!entities.is_empty()).then(|| json!({ "deletions": [], "entities": entities })),
         not_drawn,
-        bytes,
     }
 }
 

@@ -716,7 +716,6 @@ impl Builder<'_> {
         })
     }
 
-    /// Every mesh's hull points (in the mesh's frame, scaled) and solid.
     /// Where mesh asset `i`'s file is: under the compiler's `meshdir`,
     /// relative to the main file's folder.
     fn mesh_path(&self, i: usize) -> std::path::PathBuf {
@@ -769,6 +768,7 @@ impl Builder<'_> {
         })
     }
 
+    /// Every mesh's hull points (in the mesh's frame, scaled) and solid.
     fn hulls(&mut self) -> HashMap<usize, (Vec<[f64; 3]>, Option<Mass>)> {
         let m = self.m;
         let mut out = HashMap::new();
