@@ -25,7 +25,7 @@ mod reader;
 pub use connection::{Connection, CONTROL_TIMEOUT};
 pub use controller::Controller;
 pub use monitor::Monitor;
-pub use names::Names;
+pub use names::{Frame, Names};
 use reader::StateReader;
 
 pub use cosim_shared as shared;

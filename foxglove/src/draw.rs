@@ -151,6 +151,9 @@ pub struct Drawing {
     shapes: Vec<Vec<(PlacedShape, Vec<[f64; 3]>)>>,
     planes: Vec<(String, Vector3<f64>, Vector3<f64>)>,
     joints: Vec<Link>,
+    /// The named frames (`[[body.frame]]`): body index, name, pose in the
+    /// body's frame.
+    frames: Vec<(usize, String, Value, Value)>,
 }
 
 /// A joint as drawn: a line from its anchor or first body to the other.
@@ -206,6 +209,18 @@ impl Drawing {
                     anchor: Vector3::from(j.anchor),
                     a: end(&j.body_a),
                     b: end(&j.body_b),
+                })
+                .collect(),
+            frames: scene
+                .frames()
+                .map(|(k, f)| {
+                    let q = quaternion(&f.orientation);
+                    (
+                        k,
+                        f.name.clone(),
+                        vec3(&Vector3::from(f.position)),
+                        quat(&q),
+                    )
                 })
                 .collect(),
         }
@@ -367,10 +382,11 @@ impl Drawing {
     }
 
     /// The `foxglove.FrameTransforms` of a state: `world` to each body's
-    /// frame (named after the body).
+    /// frame (named after the body), then each body to its named frames
+    /// (a robot's merged links, by their names).
     pub fn frame_transforms(&self, t: f64, poses: &[Pose]) -> Value {
         let stamp = time(t);
-        let transforms: Vec<Value> = poses
+        let mut transforms: Vec<Value> = poses
             .iter()
             .zip(&self.names)
             .map(|(p, name)| {
@@ -378,6 +394,10 @@ impl Drawing {
                         "translation": vec3(&p.position), "rotation": quat(&p.orientation) })
             })
             .collect();
+        transforms.extend(self.frames.iter().map(|(b, name, at, q)| {
+            json!({ "timestamp": stamp, "parent_frame_id": self.names[*b], "child_frame_id": name,
+                    "translation": at, "rotation": q })
+        }));
         json!({ "transforms": transforms })
     }
 }

@@ -12,6 +12,10 @@ pub mod urdf;
 
 pub use options::{Imported, Options};
 
+/// The largest effort of a drive the file leaves unbounded (a spring, a
+/// damper, an actuator without `forcerange`): bounds no real robot meets.
+pub const UNBOUNDED: f64 = 1e9;
+
 use cosim_shared::SceneError;
 use std::path::Path;
 

@@ -142,6 +142,9 @@ fn add(scene: &mut Scene, robot: Scene, name: &str, pose: &Isometry3<f64>) {
         b.velocity = turn(b.velocity);
         b.angular_velocity = turn(b.angular_velocity);
         b.force = turn(b.force);
+        for f in &mut b.frame {
+            f.name = named(&f.name);
+        }
         scene.bodies.push(b);
     }
     for mut j in robot.joints {

@@ -231,6 +231,17 @@ class Names:
         self.motors: List[str] = [j["name"] for j in scene.get("joint", []) if "motor" in j]
         self._body = {n: i for i, n in enumerate(self.bodies)}
         self._joint = {n: i for i, n in enumerate(self.joints)}
+        # Named frames fixed in bodies ([[body.frame]]: a robot's links
+        # merged into their parents by fixed joints): (body index,
+        # position, orientation scalar first) in the body's frame.
+        self.frames: Dict[str, Tuple[int, List[float], List[float]]] = {}
+        for i, b in enumerate(scene.get("body", [])):
+            for f in b.get("frame", []):
+                self.frames[f["name"]] = (
+                    i,
+                    list(f.get("position", [0.0, 0.0, 0.0])),
+                    list(f.get("orientation", [1.0, 0.0, 0.0, 0.0])),
+                )
 
     def body(self, name: Union[str, int]) -> int:
         """The index of body `name` (an index passes through)."""
@@ -239,6 +250,18 @@ class Names:
     def joint(self, name: Union[str, int]) -> int:
         """The index of joint `name` (an index passes through)."""
         return _index(name, self._joint, "joint", "joints", self.joints)
+
+    def frame(self, name: str) -> Tuple[int, List[float], List[float]]:
+        """Frame `name` as (body index, position, orientation scalar first)
+        in the body's frame: a body's own (at its centre of mass) or a
+        named frame fixed in one (a robot's link merged into its parent)."""
+        if name in self._body:
+            return (self._body[name], [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0])
+        try:
+            return self.frames[name]
+        except KeyError:
+            known = self.bodies + list(self.frames)
+            raise KeyError(f"no frame named {name!r}; the frames are {known}") from None
 
 
 def _index(name: Union[str, int], table: Dict[str, int], kind: str, kinds: str, names: List[str]) -> int:

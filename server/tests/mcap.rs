@@ -387,4 +387,35 @@ fn a_robots_recording_draws_its_visual_meshes_where_its_links_are() {
     );
     assert!(compared >= 8, "{compared} links compared");
     assert!(worst.0 < 0.01, "{worst:?}");
+    // The links merged into panda_link7 by fixed joints (link8, the hand)
+    // are frames of it in /tf, by their names; the hand's frame is where
+    // its visual mesh (at the link's origin in the URDF) is drawn.
+    let parent = |name: &str| {
+        v["tf"]
+            .as_array()
+            .expect("transforms")
+            .iter()
+            .find(|t| t["child_frame_id"] == name)
+            .map(|t| t["parent_frame_id"].as_str().unwrap_or("").to_string())
+    };
+    assert_eq!(parent("panda_link8").as_deref(), Some("panda_link7"));
+    assert_eq!(parent("panda_hand").as_deref(), Some("panda_link7"));
+    let hand = frames["panda_link7"] * frames["panda_hand"];
+    let drawn = visuals
+        .iter()
+        .find(|e| e["frame_id"] == "panda_link7")
+        .and_then(|e| {
+            e["models"].as_array()?.iter().find(|m| {
+                m["data"].as_str().is_some_and(|f| {
+                    std::fs::read(f).ok()
+                        == std::fs::read(robots.join("panda_description/meshes/visual/hand.dae"))
+                            .ok()
+                })
+            })
+        })
+        .map(|m| frames["panda_link7"] * pose_of(&m["pose"]))
+        .expect("the hand's visual on panda_link7");
+    let d = (hand.translation.vector - drawn.translation.vector).norm()
+        + hand.rotation.angle_to(&drawn.rotation);
+    assert!(d < 1e-12, "the hand's frame is {d} from its visual");
 }

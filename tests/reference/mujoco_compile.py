@@ -79,6 +79,22 @@ def compile_file(path):
             }
         )
     kinds = {0: "free", 1: "ball", 2: "slide", 3: "hinge"}
+    # The bound of the torque a joint's torque actuator (a fixed gain, no
+    # bias) puts on it: gear times the force range and gain times the
+    # control range, the tighter (None without a range; "several" where
+    # more than one drives the joint).
+    effort = {}
+    for a in range(m.nu):
+        if m.actuator_trntype[a] != 0 or m.actuator_gaintype[a] != 0 or np.any(m.actuator_biasprm[a][:3]):
+            continue
+        j = int(m.actuator_trnid[a][0])
+        gear = abs(m.actuator_gear[a][0])
+        bounds = []
+        if m.actuator_forcelimited[a]:
+            bounds.append(gear * np.abs(m.actuator_forcerange[a]).max())
+        if m.actuator_ctrllimited[a]:
+            bounds.append(gear * abs(m.actuator_gainprm[a][0]) * np.abs(m.actuator_ctrlrange[a]).max())
+        effort[j] = "several" if j in effort else (float(min(bounds)) if bounds else None)
     joints = []
     for j in range(m.njnt):
         joints.append(
@@ -89,6 +105,7 @@ def compile_file(path):
                 "anchor": d.xanchor[j].tolist(),
                 "axis": d.xaxis[j].tolist(),
                 "range": m.jnt_range[j].tolist() if m.jnt_limited[j] else None,
+                "effort": effort.get(j),
             }
         )
     # The geoms MuJoCo's viewer draws by default (groups 0 to 2) on bodies

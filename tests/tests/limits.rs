@@ -288,6 +288,14 @@ fn a_joints_range_is_checked_and_named() {
             ),
             "joint \"h\".limit_restitution",
         ),
+        (
+            with("fixed", None, "max_effort = 1.0"),
+            "joint \"h\".max_effort: a fixed joint takes no effort",
+        ),
+        (
+            with("revolute", y, "max_effort = -1.0"),
+            "joint \"h\".max_effort",
+        ),
     ] {
         let err = cosim_shared::Scene::parse(&(base.clone() + &joint), "t.toml")
             .expect_err("refused")

@@ -2,7 +2,7 @@
 //! gymnasium's MuJoCo models) read by the importer and checked against
 //! MuJoCo's own compiler (the `mujoco` Python package,
 //! tests/reference/mujoco_compile.py): every body's mass, centre of mass
-//! and inertia, every joint's anchor, axis and range, to 1e-9 relative
+//! and inertia, every joint's anchor, axis, range and effort bound, to 1e-9 relative
 //! (1e-6 for a body with mesh geoms: MuJoCo keeps a mesh's vertices in
 //! single precision, whose rounding, 6e-8, is what the two differ by).
 //! `scripts/mjcf-data.sh` downloads the two packages' files once into
@@ -258,6 +258,24 @@ fn compare(imported: &Imported, mj: &Value) -> (f64, String, usize, usize) {
                 1e-9,
                 format!("joint {name:?} range {o:?} against {r:?}"),
             ),
+        }
+        // A torque actuator's bound is the joint's effort bound (a joint
+        // with a drive of its own keeps its drive's bound instead).
+        let effort = &j["effort"];
+        if effort != "several" && ours.motor.is_none() {
+            match (effort.as_f64(), ours.max_effort) {
+                (None, None) => {}
+                (Some(e), Some(o)) => note(
+                    (e - o).abs() / e,
+                    1e-9,
+                    format!("joint {name:?} effort bound {o} against {e}"),
+                ),
+                (e, o) => note(
+                    f64::INFINITY,
+                    1e-9,
+                    format!("joint {name:?} effort bound {o:?} against {e:?}"),
+                ),
+            }
         }
     }
     (worst.0, worst.1, bodies, joints)

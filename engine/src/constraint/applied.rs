@@ -3,7 +3,7 @@
 //! `nu_free = nu + M^-1 p_app` with `p_app = h (F_ext + tau - w x J w)`.
 
 use crate::model::state::State;
-use crate::model::{Attachment, Model};
+use crate::model::{Attachment, Joint, Model};
 use nalgebra::{Matrix3, Vector3};
 
 /// What the controllers (and the scene's constants) apply.
@@ -126,6 +126,42 @@ pub fn inverse_masses(model: &Model, state: &State, only: Option<&[u32]>, out: &
     );
 }
 
+/// A joint's held effort within its bound (`Joint::max_effort`), and
+/// whether it was clamped: a hinge's or slider's part along its axis (the
+/// rest the joint holds, and it is kept), a spherical joint's length.
+pub fn bounded(joint: &Joint, state: &State, effort: &Vector3<f64>) -> (Vector3<f64>, bool) {
+    let bound = joint.max_effort;
+    if bound == f64::INFINITY {
+        return (*effort, false);
+    }
+    match super::joint::axis(joint, state) {
+        Some(u) => {
+            let along = u.dot(effort);
+            if along.abs() <= bound {
+                return (*effort, false);
+            }
+            (effort - u * (along - bound.copysign(along)), true)
+        }
+        None => {
+            let n = effort.norm();
+            if n <= bound {
+                return (*effort, false);
+            }
+            (effort * (bound / n), true)
+        }
+    }
+}
+
+/// How many joints' held efforts their bounds clamp in `state`.
+pub fn clamped(model: &Model, state: &State, inputs: &Inputs) -> usize {
+    model
+        .joints
+        .iter()
+        .zip(&inputs.joint_torque)
+        .filter(|(j, e)| bounded(j, state, e).1)
+        .count()
+}
+
 /// `nu_free = nu + M^-1 p_app`, laid out `[v_0, w_0, v_1, w_1, ...]`;
 /// zero for a sleeping body. With `only` (the awake bodies, where the
 /// sleeping ones' entries are zero already: `sleep::Written`), those alone
@@ -176,7 +212,7 @@ pub fn free_velocity(
         }
     }
     for (joint, effort) in model.joints.iter().zip(&inputs.joint_torque) {
-        let p = effort * h;
+        let p = bounded(joint, state, effort).0 * h;
         // A slider's effort is a force at B's anchor, on both sides at
         // that one point (so it has no moment of its own); else a torque.
         let at = joint

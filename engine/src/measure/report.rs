@@ -200,6 +200,8 @@ pub struct StepReport {
     /// (`joint::anchor_error`, `joint::angle_error`).
     pub max_joint_error: f64,
     pub max_joint_angle_error: f64,
+    /// Joints whose held effort their bound clamped (`applied::bounded`).
+    pub clamped_efforts: usize,
     pub energy: Energy,
     pub timings: Timings,
 }

@@ -249,6 +249,9 @@ pub struct Joint {
     /// torque (N m), or for a slider a force (N) at B's anchor
     /// (`applied::free_velocity`).
     pub effort: Vector3<f64>,
+    /// The largest held effort (`applied::bounded`): infinite unless the
+    /// scene bounds it.
+    pub max_effort: f64,
     pub turning: Turning,
     /// Prismatic: the unit sliding axis in A's frame (a world direction
     /// for the world); the anchors may part along it only.
@@ -627,6 +630,7 @@ impl Model {
                         _ => local(b, anchor),
                     },
                     effort: v3(j.force.unwrap_or(j.torque)),
+                    max_effort: j.max_effort.unwrap_or(f64::INFINITY),
                     turning,
                     slide,
                     collide: j.collide,

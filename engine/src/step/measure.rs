@@ -3,6 +3,7 @@
 //! penetration, joint error) and the stage times.
 
 use super::{Clock, Engine};
+use crate::constraint::applied;
 use crate::measure;
 use crate::measure::report::{Lap, StepError, StepReport, Timings};
 use crate::solver::Rung;
@@ -44,6 +45,7 @@ impl Engine {
             max_penetration: 0.0,
             max_joint_error: 0.0,
             max_joint_angle_error: 0.0,
+            clamped_efforts: applied::clamped(&self.model, &self.state, &self.inputs),
             islands: 0,
             largest_island: 0,
             lemke_islands: 0,

@@ -10,7 +10,8 @@
 //!   and density or its `mass`, a body's from its geoms in the inertia
 //!   groups or its `<inertial>`; bodies with no joint are welded to their
 //!   parent and become one body with it (MuJoCo's `fusestatic`), named
-//!   after the top one; bodies welded to the world are bodies fixed to it;
+//!   after the top one, the others its named frames (`[[body.frame]]`);
+//!   bodies welded to the world are bodies fixed to it;
 //! - `free`, `ball`, `hinge` and `slide` joints with ranges. A body on
 //!   several joints (a hip's three hinges, a planar root's two slides and
 //!   a hinge) is a chain in maximal coordinates: one body per joint but
@@ -42,7 +43,8 @@ mod xml;
 
 use crate::options::{Imported, Options};
 use crate::problems::Problems;
-use cosim_shared::scene::{MotorDesc, MIN_MOMENT};
+use crate::UNBOUNDED;
+use cosim_shared::scene::{FrameEntry, MotorDesc, MIN_MOMENT};
 use cosim_shared::{
     BodyDesc, JointDesc, JointKind as Kind, PlaneDesc, Scene, SceneError, ShapeEntry, VisualEntry,
     VisualKind, WORLD,
@@ -57,10 +59,6 @@ use std::path::Path;
 /// it chains, taken from that body. A tenth: at a hundredth PGS diverged
 /// on gymnasium's hopper after 1.9 s (mass ratios of 100 in its root).
 pub const CHAIN_SHARE: f64 = 0.1;
-
-/// The largest effort of a drive the file leaves unbounded (a spring, an
-/// actuator without `forcerange`): bounds no real robot meets.
-pub const UNBOUNDED: f64 = 1e9;
 
 /// Appended to a joint's name where a body has it (MJCF names bodies and
 /// joints apart; a scene names both in one space).
@@ -530,6 +528,19 @@ impl Builder<'_> {
                 group: (!self_collision).then(|| group_name.clone()),
                 shape: shapes,
                 visual,
+                // The welded bodies' frames, by their names.
+                frame: members[1..]
+                    .iter()
+                    .map(|&b| {
+                        let at = pose.inverse() * placed.frame[b];
+                        let q = at.rotation;
+                        FrameEntry {
+                            name: body_name(m, b),
+                            position: at.translation.vector.into(),
+                            orientation: [q.w, q.i, q.j, q.k],
+                        }
+                    })
+                    .collect(),
             };
             if desc.shape.is_empty() && desc.inertia.is_none() {
                 desc.inertia = Some(six(&Matrix3::identity()));
@@ -629,6 +640,7 @@ impl Builder<'_> {
                         group: None,
                         shape: Vec::new(),
                         visual: Vec::new(),
+                        frame: Vec::new(),
                     });
                     v
                 };
@@ -713,6 +725,7 @@ impl Builder<'_> {
             range,
             limit_restitution: None,
             motor: None,
+            max_effort: None,
         })
     }
 
@@ -928,9 +941,32 @@ impl Builder<'_> {
                 None
             };
             match motor {
-                None => self.notes.push(format!(
-                    "{label}: a torque on joint {joint:?} (gear {g}), set by the controller"
-                )),
+                None => {
+                    // force = gain ctrl, clamped to forcerange, times the
+                    // gear: the torque is bounded by both ranges.
+                    let by_ctrl = a
+                        .ctrlrange
+                        .map(|r| r[0].abs().max(r[1].abs()) * (a.gain * g).abs());
+                    let effort = [bound, by_ctrl].into_iter().flatten().reduce(f64::min);
+                    let asymmetric = [a.forcerange, a.ctrlrange]
+                        .into_iter()
+                        .flatten()
+                        .any(|r| r[0] != -r[1]);
+                    self.notes.push(match effort {
+                        Some(e) if asymmetric => format!(
+                            "{label}: a torque on joint {joint:?} (gear {g}), set by the controller, within +-{e} (its ranges are not symmetric: the wider side is taken)"
+                        ),
+                        Some(e) => format!(
+                            "{label}: a torque on joint {joint:?} (gear {g}), set by the controller, within +-{e}"
+                        ),
+                        None => format!(
+                            "{label}: a torque on joint {joint:?} (gear {g}), set by the controller"
+                        ),
+                    });
+                    if let Some(e) = effort.filter(|e| *e > 0.0) {
+                        scene.joints[s].max_effort = Some(e);
+                    }
+                }
                 Some(_) if scene.joints[s].motor.is_some() => self.notes.push(format!(
                     "{label}: joint {joint:?} has a drive already; left out"
                 )),
@@ -1087,6 +1123,7 @@ impl Builder<'_> {
                 range: None,
                 limit_restitution: None,
                 motor: None,
+                max_effort: None,
             });
         }
     }
@@ -1194,6 +1231,7 @@ fn fixed(name: &str, a: &str, b: &str, at: Vector3<f64>) -> JointDesc {
         range: None,
         limit_restitution: None,
         motor: None,
+        max_effort: None,
     }
 }
 

@@ -159,6 +159,9 @@ pub struct Actuator {
     pub gear: f64,
     pub bias: [f64; 3],
     pub forcerange: Option<[f64; 2]>,
+    pub ctrlrange: Option<[f64; 2]>,
+    /// The gain on the control (`gainprm[0]`; a `motor`'s is 1).
+    pub gain: f64,
     /// Activation dynamics left out (`dyntype`), said.
     pub dynamics: Option<String>,
     pub line: u32,
@@ -879,6 +882,13 @@ impl Reader<'_> {
             on.then_some([v[0], v[1]])
         };
         let forcerange = range(self, "forcerange", "forcelimited");
+        let ctrlrange = range(self, "ctrlrange", "ctrllimited");
+        let gain = match tag {
+            "motor" | "general" => self
+                .prefix(el, cls, "gainprm", &[1.0; 10])
+                .map_or(1.0, |g| g[0]),
+            _ => 1.0,
+        };
         // The gain scales the control alone: the drive's kind and gains
         // are in the bias.
         let bias = match tag {
@@ -925,6 +935,8 @@ impl Reader<'_> {
             gear,
             bias,
             forcerange,
+            ctrlrange,
+            gain,
             dynamics,
             line,
             label,

@@ -8,7 +8,8 @@
 //! - links joined by fixed joints are one body (MuJoCo's `fusestatic`):
 //!   masses, centres of mass and inertias combined, every link's
 //!   collisions its shapes at their poses; a link with no mass rides on
-//!   its parent that way, and the merged names are said;
+//!   its parent that way, and the merged names are said and kept as the
+//!   body's named frames (`[[body.frame]]`, at each link's origin);
 //! - the root is the world when it has no mass (`world`, `base_footprint`,
 //!   PyBullet's mass 0); a root with mass floats free (PyBullet's and
 //!   Drake's default) unless the options fix it to the world; a `floating`
@@ -16,17 +17,20 @@
 //! - `revolute`, `continuous`, `prismatic` and `spherical` joints, passive
 //!   (MuJoCo and Drake leave a joint no actuator drives free; PyBullet's
 //!   velocity motors are its best-known gotcha): `<limit lower upper>` is
-//!   the range, `effort` and `velocity` bound what drives the joint
-//!   (nothing here yet); `<dynamics friction>` is a joint's dry friction
-//!   (a motor holding rate 0 with at most that effort, MuJoCo's
-//!   `frictionloss`); a joint's two bodies do not collide (MuJoCo's
-//!   parent-child filter);
+//!   the range, `effort` bounds what drives the joint (a servo, and a
+//!   controller's torque: MuJoCo's `actuatorfrcrange`), `velocity` is not
+//!   used;
+//!   `<dynamics damping>` is a viscous damper (a velocity actuator holding
+//!   rate 0, implicit in the step, MuJoCo's joint `damping`), and
+//!   `<dynamics friction>` dry friction where there is no damping (a motor
+//!   holding rate 0 with at most that effort, MuJoCo's `frictionloss`); a
+//!   joint's two bodies do not collide (MuJoCo's parent-child filter);
 //! - a robot's links do not touch each other unless the options ask
 //!   (PyBullet's default; a scene `group`);
 //! - no floor unless the options ask for one, then under the robot's
 //!   lowest point.
 //!
-//! Not modelled yet, and said when a file has them: `<dynamics damping>`,
+//! Not modelled yet, and said when a file has them:
 //! `<mimic>` (the joint moves on its own). Cylinders are capsules of the
 //! same radius and overall length (said). Meshes are not read yet
 //! (issue 45, point 2): a problem each, with the file they resolve to.
@@ -38,6 +42,7 @@ pub use package::resolve;
 pub use read::{Geometry, JointType, Robot};
 
 use crate::problems::Problems;
+use crate::UNBOUNDED;
 use cosim_shared::{Scene, SceneError};
 use nalgebra::{Isometry3, Matrix3, UnitQuaternion, Vector3};
 use std::collections::BTreeMap;
@@ -416,6 +421,18 @@ impl Tree {
                     );
                 }
             }
+            // The merged links' frames, by their names (MuJoCo keeps
+            // them as bodies; Drake and Pinocchio as frames).
+            for l in self.members(g).filter(|&l| l != g) {
+                let pose = at.inverse() * self.frame[l];
+                let _ = write!(
+                    s,
+                    "[[body.frame]]\nname = {:?}\nposition = {}\norientation = {}\n",
+                    links[l].name,
+                    v3(&pose.translation.vector),
+                    quat(&pose.rotation)
+                );
+            }
             for l in self.members(g) {
                 for v in &links[l].visuals {
                     let pose = at.inverse() * self.frame[l] * v.origin;
@@ -482,7 +499,7 @@ impl Tree {
             let at = self.frame[p] * j.origin;
             // A URDF's links and joints have names of their own kinds; a
             // scene's are one set: a joint named as a body is renamed.
-            let name = if body_name.contains(&j.name) {
+            let name = if body_name.contains(&j.name) || links.iter().any(|l| l.name == j.name) {
                 let renamed = format!("{}_joint", j.name);
                 notes.push(format!(
                     "joint {:?} is named as a link: it is {renamed:?} here",
@@ -521,6 +538,11 @@ impl Tree {
                 }
                 let _ = writeln!(s, "position = {q:?}");
             }
+            // The effort limit bounds a controller's torque (MuJoCo's
+            // actuatorfrcrange from a URDF's effort).
+            if let (Some(e), true) = (j.effort.filter(|&e| e > 0.0), hinge_or_slider) {
+                let _ = writeln!(s, "max_effort = {e:?}");
+            }
             if let (Some(servo), true) = (options.servo, hinge_or_slider) {
                 // The file's effort limit bounds it (MuJoCo's forcerange
                 // from a URDF's effort), unless the servo gives its own.
@@ -544,6 +566,24 @@ impl Tree {
                         "a servo needs the joint's <limit effort> (or the servo's max_effort)",
                     ),
                 }
+            } else if j.damping > 0.0 && hinge_or_slider {
+                // A viscous damper, implicit in the step (MuJoCo's joint
+                // damping): a velocity actuator holding rate 0, bounded
+                // by the joint's effort limit where it has one (a huge
+                // bound beside the step's small impulses makes Lemke's
+                // pivots lose precision).
+                let bound = j.effort.filter(|&e| e > 0.0).unwrap_or(UNBOUNDED);
+                let _ = writeln!(
+                    s,
+                    "motor = {{ speed = 0.0, kv = {:?}, max_effort = {bound:?} }}",
+                    j.damping
+                );
+                if j.friction > 0.0 {
+                    notes.push(format!(
+                        "joint {:?}: its <dynamics friction> is left out beside its damping",
+                        j.name
+                    ));
+                }
             } else if j.friction > 0.0 && hinge_or_slider {
                 let _ = writeln!(
                     s,
@@ -551,10 +591,16 @@ impl Tree {
                     j.friction
                 );
             }
-            if j.damping > 0.0 {
+            if options.servo.is_some() && j.damping > 0.0 && hinge_or_slider {
                 notes.push(format!(
-                    "joint {:?}: <dynamics damping=\"{}\"> is not modelled yet",
-                    j.name, j.damping
+                    "joint {:?}: the servo drives it: its <dynamics damping> is left out",
+                    j.name
+                ));
+            }
+            if !hinge_or_slider && (j.damping > 0.0 || j.friction > 0.0) {
+                notes.push(format!(
+                    "joint {:?}: <dynamics> is left out on a {kind} joint",
+                    j.name
                 ));
             }
             if let Some((m, _, _)) = &j.mimic {

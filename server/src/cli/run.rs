@@ -97,6 +97,8 @@ struct Tally {
     resolves: u64,
     regularized: u64,
     projected: u64,
+    /// Joint-steps whose held effort its bound clamped.
+    clamped_efforts: u64,
     ladder: crate::engine::LadderCounts,
 }
 
@@ -111,6 +113,7 @@ impl Tally {
         self.resolves += r.resolves as u64;
         self.regularized += r.regularized as u64;
         self.projected += r.projected as u64;
+        self.clamped_efforts += r.clamped_efforts as u64;
         self.ladder.add(r);
         if let Some(e) = r.error {
             self.failures += 1;
@@ -461,6 +464,7 @@ fn simulate(
         "resolves": tally.resolves,
         "regularized_solves": tally.regularized,
         "projected_contacts": tally.projected,
+        "clamped_efforts": tally.clamped_efforts,
         "ladder": crate::output::ladder_json(&tally.ladder),
         "fallback_steps": tally.ladder.fell_back(),
         "shadow_max_dv": shadow.then_some(shadow_max.0),

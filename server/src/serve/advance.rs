@@ -55,6 +55,13 @@ impl Server {
         self.c.max_penetration = self.c.max_penetration.max(report.max_penetration);
         self.c.max_joint_error = self.c.max_joint_error.max(report.max_joint_error);
         self.c.projected_contacts += report.projected as u64;
+        if report.clamped_efforts > 0 && self.c.clamped_efforts == 0 {
+            tracing::warn!(
+                "step {}: a joint's torque exceeds its effort bound and is clamped to it; further clamps are counted (summary: clamped_efforts)",
+                k + 1
+            );
+        }
+        self.c.clamped_efforts += report.clamped_efforts as u64;
         self.c.early_matrix_steps += u64::from(report.early_matrix);
         self.c.ladder.add(&report);
         if let Some(e) = report.error {
@@ -166,6 +173,7 @@ impl Server {
             "max_penetration": c.max_penetration,
             "max_joint_error": c.max_joint_error,
             "projected_contacts": c.projected_contacts,
+            "clamped_efforts": c.clamped_efforts,
             "early_matrix_steps": c.early_matrix_steps,
             "wall_seconds": wall,
             "stepping_seconds": c.stepping_seconds,

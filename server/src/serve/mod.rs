@@ -203,6 +203,9 @@ pub struct Counters {
     pub max_joint_error: f64,
     /// Contacts projected out of deep penetration (as `run` counts them).
     pub projected_contacts: u64,
+    /// Joint-steps whose held effort (the controllers' net torque) its
+    /// bound clamped (`JointDesc::max_effort`).
+    pub clamped_efforts: u64,
     /// Steps whose first solve used the matrix `Engine::prepare` made
     /// while the controllers computed (`StepReport::early_matrix`).
     pub early_matrix_steps: u64,

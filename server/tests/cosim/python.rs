@@ -142,3 +142,27 @@ fn the_readmes_python_runs_against_a_server() {
         assert_eq!(s["inputs_rejected"], serde_json::json!({}), "{s}");
     }
 }
+
+/// The package's `Names.frame`: a named frame (`[[body.frame]]`, a
+/// robot's merged link) is its body's index and its pose there; a body's
+/// name is its own frame; an unknown name lists the frames there are.
+#[test]
+fn the_python_names_find_a_frame_by_name() {
+    let code = r#"
+from cosim.client import Names
+n = Names({"body": [{"name": "base"}, {"name": "arm", "frame": [
+    {"name": "hand", "position": [0.0, 0.0, 0.1], "orientation": [0.0, 1.0, 0.0, 0.0]}]}]})
+assert n.frame("hand") == (1, [0.0, 0.0, 0.1], [0.0, 1.0, 0.0, 0.0]), n.frame("hand")
+assert n.frame("base") == (0, [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0])
+try:
+    n.frame("hnad")
+    raise SystemExit("an unknown frame was found")
+except KeyError as e:
+    assert "'hand'" in str(e), e
+print("ok")
+"#;
+    let out = Command::new("python3").args(["-c", code]).output().unwrap();
+    let printed =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && printed.trim() == "ok", "{printed}");
+}

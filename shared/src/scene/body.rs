@@ -51,6 +51,25 @@ pub struct BodyDesc {
     /// (a robot's visual meshes); drawn, never collided.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub visual: Vec<super::VisualEntry>,
+    /// `[[body.frame]]`: named frames fixed in the body (a robot's links
+    /// merged into it by fixed joints: a hand, a camera mount, a tool
+    /// tip), so that controllers and the recordings find them by name.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub frame: Vec<FrameEntry>,
+}
+
+/// `[[body.frame]]`: a named frame at `position` and `orientation` in its
+/// body's frame (whose origin is the centre of mass). Its name is one of
+/// the scene's: no body, joint or other frame has it.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FrameEntry {
+    pub name: String,
+    #[serde(default)]
+    pub position: [f64; 3],
+    /// Unit quaternion, scalar first.
+    #[serde(default = "identity_quaternion")]
+    pub orientation: [f64; 4],
 }
 
 /// `[[body.shape]]`: one of a body's shapes, a sphere (`radius`), capsule

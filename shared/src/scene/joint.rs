@@ -78,6 +78,15 @@ pub struct JointDesc {
     /// actuators with a force range), implicit in the step.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub motor: Option<MotorDesc>,
+    /// The largest effort of the joint's held input (N m, or N for a
+    /// slider), > 0: a controller's torque and the scene's `torque` or
+    /// `force` are clamped to it at each step (a hinge's or slider's part
+    /// along the axis, a spherical joint's length), and each clamped step
+    /// is counted (a URDF's `<limit effort>`, MuJoCo's actuator
+    /// `forcerange` and `ctrlrange`). Not for a fixed joint. Default: no
+    /// bound.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_effort: Option<f64>,
 }
 
 /// A joint motor with an effort of at most `max_effort`, one bounded row

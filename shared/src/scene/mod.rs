@@ -127,6 +127,14 @@ impl Scene {
         }
     }
 
+    /// Every named frame (`[[body.frame]]`) with its body's index.
+    pub fn frames(&self) -> impl Iterator<Item = (usize, &FrameEntry)> {
+        self.bodies
+            .iter()
+            .enumerate()
+            .flat_map(|(k, b)| b.frame.iter().map(move |f| (k, f)))
+    }
+
     /// Contact ids per pair of bodies (the engine's `Model::features`):
     /// per pair of their shapes, 1 in a scene of spheres, which touch at
     /// one point, else [`MAX_FEATURES`]; times the square of the most

@@ -127,6 +127,12 @@ impl Scene {
                 finite3(&e.position).map_err(|m| err(g("position"), m))?;
                 unit_quaternion(&e.orientation).map_err(|m| err(g("orientation"), m))?;
             }
+            for (k, e) in b.frame.iter().enumerate() {
+                let g = |key: &str| f(&format!("frame[{k}].{key}"));
+                claim(&e.name, g("name"))?;
+                finite3(&e.position).map_err(|m| err(g("position"), m))?;
+                unit_quaternion(&e.orientation).map_err(|m| err(g("orientation"), m))?;
+            }
             for (k, v) in b.visual.iter().enumerate() {
                 let g = |key: &str| f(&format!("visual[{k}].{key}"));
                 if let Some((key, m)) = v.problem() {
@@ -360,6 +366,15 @@ impl Scene {
                     }
                 }
                 positive(motor.max_effort).map_err(|m| err(f("motor.max_effort"), m))?;
+            }
+            if let Some(e) = j.max_effort {
+                if j.kind == JointKind::Fixed {
+                    return Err(err(
+                        f("max_effort"),
+                        "a fixed joint takes no effort: it has nothing to drive".into(),
+                    ));
+                }
+                positive(e).map_err(|m| err(f("max_effort"), m))?;
             }
             if let Some(e) = j.limit_restitution {
                 if j.range.is_none() {
