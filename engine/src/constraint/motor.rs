@@ -69,22 +69,28 @@ pub fn impulse_on_a(axis: &Vector3<f64>, p: f64) -> Vector3<f64> {
 /// or a servo's coordinate) and the coordinate `q` at the step's start. A
 /// hinge's position error is taken the short way round.
 pub fn drive(motor: &Motor, target: f64, q: f64, h: f64, hinge: bool) -> (f64, f64) {
+    let eps = compliance(motor, h);
     match motor.gains {
-        Gains::Rigid => (target, 0.0),
-        Gains::Velocity { kv } => (target, 1.0 / (h * kv)),
+        Gains::Rigid | Gains::Velocity { .. } => (target, eps),
         Gains::Position { kp, kd } => {
             let mut e = target - q;
             if hinge {
                 use std::f64::consts::{PI, TAU};
                 e = (e + PI).rem_euclid(TAU) - PI;
             }
-            let c = h * h * kp + h * kd;
-            (h * kp * e / c, 1.0 / c)
+            // Divided, not times eps: the servo's bits as they were.
+            (h * kp * e / (h * h * kp + h * kd), eps)
         }
     }
 }
 
-/// A motor's compliance `eps` alone (constant over a run).
+/// A motor's compliance `eps` (constant over a run): 0 when rigid,
+/// `1 / (h kv)` for a velocity actuator, `1 / (h^2 kp + h kd)` for a
+/// servo.
 pub fn compliance(motor: &Motor, h: f64) -> f64 {
-    drive(motor, 0.0, 0.0, h, false).1
+    match motor.gains {
+        Gains::Rigid => 0.0,
+        Gains::Velocity { kv } => 1.0 / (h * kv),
+        Gains::Position { kp, kd } => 1.0 / (h * h * kp + h * kd),
+    }
 }

@@ -214,6 +214,19 @@ impl Scene {
         for (i, j) in self.joints.iter().enumerate() {
             claim(&j.name, format!("joint[{i}].name"))?;
             let f = |k: &str| format!("joint {:?}.{k}", j.name);
+            // What only a hinge or a slider has: a coordinate and its axis.
+            let axial_only = |field: &str, what: &str| -> Result<(), SceneError> {
+                match j.kind {
+                    JointKind::Revolute | JointKind::Prismatic => Ok(()),
+                    kind => Err(err(
+                        f(field),
+                        format!(
+                            "only a revolute or prismatic joint has {what} (this one is {})",
+                            kind.as_str()
+                        ),
+                    )),
+                }
+            };
             for (key, body) in [("body_a", &j.body_a), ("body_b", &j.body_b)] {
                 if body != WORLD && !self.bodies.iter().any(|b| &b.name == body) {
                     let known: Vec<&str> = self.bodies.iter().map(|b| b.name.as_str()).collect();
@@ -277,27 +290,11 @@ impl Scene {
                         ));
                     }
                 }
-                (kind, Some(_)) => {
-                    return Err(err(
-                        f("range"),
-                        format!(
-                            "only a revolute or prismatic joint has a range (this one is {})",
-                            kind.as_str()
-                        ),
-                    ))
-                }
+                (_, Some(_)) => axial_only("range", "a range")?,
                 (_, None) => {}
             }
             if let Some(q) = j.position {
-                if !matches!(j.kind, JointKind::Revolute | JointKind::Prismatic) {
-                    return Err(err(
-                        f("position"),
-                        format!(
-                            "only a revolute or prismatic joint has a coordinate (this one is {})",
-                            j.kind.as_str()
-                        ),
-                    ));
-                }
+                axial_only("position", "a coordinate")?;
                 let pi = std::f64::consts::PI;
                 let (lo, hi) = match (j.kind, j.range) {
                     (_, Some([lo, hi])) => (lo, hi),
@@ -312,15 +309,7 @@ impl Scene {
                 }
             }
             if let Some(motor) = j.motor {
-                if !matches!(j.kind, JointKind::Revolute | JointKind::Prismatic) {
-                    return Err(err(
-                        f("motor"),
-                        format!(
-                            "only a revolute or prismatic joint has a motor (this one is {})",
-                            j.kind.as_str()
-                        ),
-                    ));
-                }
+                axial_only("motor", "a motor")?;
                 if !motor.speed.is_finite() {
                     return Err(err(
                         f("motor.speed"),
@@ -402,15 +391,7 @@ impl Scene {
                         ));
                     }
                 }
-                (kind, Some(_)) => {
-                    return Err(err(
-                        f("axis"),
-                        format!(
-                            "only a revolute or prismatic joint has an axis (this one is {})",
-                            kind.as_str()
-                        ),
-                    ))
-                }
+                (_, Some(_)) => axial_only("axis", "an axis")?,
                 (_, None) => {}
             }
         }
