@@ -524,6 +524,12 @@ fn simulate(
                 .map_or(String::new(), |f| format!(" (first: {f})"))
         );
         println!("penetration  max {:.3e} m", tally.max_penetration);
+        if tally.clamped_efforts > 0 {
+            println!(
+                "efforts      {} joint-steps clamped to their joint's max_effort",
+                tally.clamped_efforts
+            );
+        }
         println!(
             "joint error  max {:.3e} m, {:.3e} rad",
             tally.max_joint_error, tally.max_joint_angle_error
