@@ -925,3 +925,66 @@ fn a_paced_round_trip_holds_no_pacing_wait() {
     // And the run still lasts its simulated time.
     assert!(s["stepping_seconds"].as_f64().unwrap() >= 0.29, "{s}");
 }
+
+/// A controller's torque beyond its joint's `max_effort` is clamped: the
+/// run says so once and counts every clamped joint-step in its summary,
+/// and its replay (which feeds the torques as sent) is bit for bit, since
+/// the engine clamps what it is given; the trajectory is the offline one
+/// under the bound.
+#[test]
+fn a_controllers_torque_beyond_the_joints_bound_is_clamped_counted_and_replays() {
+    let dir = TempDir::new("clamp");
+    let mut scene = cosim_shared::scenes::reference().unwrap();
+    scene.joints[0].max_effort = Some(0.05);
+    let path = dir.path().join("clamped.toml");
+    std::fs::write(&path, scene.to_toml()).unwrap();
+    let name = unique("clamp");
+    let out = dir.path().join("out");
+    let server = ServerProc::start(
+        &name,
+        &out,
+        &[
+            path.to_str().unwrap(),
+            "--controllers",
+            "1",
+            "--steps",
+            "100",
+        ],
+    );
+    let mut c = Controller::join(&name, WaitMode::Hybrid).expect("join");
+    answer_until_shutdown(&mut c, |c| {
+        let mut input = InputFrame::default();
+        input.push_torque(0, [0.0, 0.0, 0.5]);
+        c.send(input).expect("send");
+    });
+    let (status, stderr) = server.finish();
+    assert!(status.success(), "{stderr}");
+    assert_eq!(
+        stderr.matches("exceeds its effort bound").count(),
+        1,
+        "{stderr}"
+    );
+    let s = summary(&out);
+    assert_eq!(s["steps"], 100);
+    assert_eq!(s["clamped_efforts"], 100, "{s}");
+    let (ok, text) = replay(&out);
+    assert!(ok && text.contains("100 steps"), "{text}");
+    // Offline: the same scene with the bound, fed the same torque.
+    use cosim_server::engine::{Engine, Model};
+    let mut e = Engine::new(Model::from_scene(&scene));
+    e.set_joint_torque(0, [0.0, 0.0, 0.5].into()).unwrap();
+    let mut unbounded = Engine::new(Model::from_scene(
+        &cosim_shared::scenes::reference().unwrap(),
+    ));
+    unbounded
+        .set_joint_torque(0, [0.0, 0.0, 0.5].into())
+        .unwrap();
+    for _ in 0..100 {
+        assert!(e.step().ok() && unbounded.step().ok());
+    }
+    let rows = positions(&out, "upper");
+    let last: [f64; 3] = e.state().bodies[0].x.into();
+    assert_eq!(rows.last().map(|r| r.1), Some(last));
+    let free: [f64; 3] = unbounded.state().bodies[0].x.into();
+    assert_ne!(last, free, "the bound changed nothing");
+}
