@@ -269,6 +269,12 @@ impl Drawing {
                     }
                     ShapeDesc::Box { half_extents: h } => cubes.push(json!({ "pose": pose(x, q),
                              "size": vec3(&(Vector3::from(h) * 2.0)), "color": c })),
+                    ShapeDesc::Cylinder {
+                        radius,
+                        half_length,
+                    } => cylinders.push(json!({ "pose": pose(x, q),
+                             "size": vec3(&Vector3::new(2.0 * radius, 2.0 * radius, 2.0 * half_length)),
+                             "bottom_scale": 1.0, "top_scale": 1.0, "color": c })),
                     // Sent once, locked to the body's frame (`hulls_update`).
                     ShapeDesc::Hull { .. } => {}
                 }
@@ -279,7 +285,9 @@ impl Drawing {
                 if shapes.len() == 1 && placed.centred() && !hull {
                     let (reach, size) = match placed.shape {
                         ShapeDesc::Sphere { radius } => (0.75 * radius, 0.35 * radius),
-                        ShapeDesc::Capsule { radius, .. } => (0.75 * radius, 0.35 * radius),
+                        ShapeDesc::Capsule { radius, .. } | ShapeDesc::Cylinder { radius, .. } => {
+                            (0.75 * radius, 0.35 * radius)
+                        }
                         ShapeDesc::Box { half_extents: h } => {
                             let small = h[0].min(h[1]).min(h[2]);
                             (h[0], 0.7 * small)

@@ -31,8 +31,8 @@ fn import(text: &str) -> Result<Scene, cosim_shared::SceneError> {
 
 /// The arm's links are its bodies where the kinematic tree puts them
 /// (each joint's origin composed from the root, each body on its inertial
-/// origin), with the URDF's masses and inertias; the cylinder is the
-/// capsule of its radius and length; the world link is the world and the
+/// origin), with the URDF's masses and inertias; the cylinder is a
+/// cylinder of its radius and length; the world link is the world and the
 /// base is fixed to it; the hinges keep their axes and limits and are
 /// passive (issue 45: an `effort` made a velocity motor that held the arm
 /// level): released level, the arm falls; its shoulder turns as a
@@ -55,16 +55,16 @@ fn the_urdf_arm_is_the_scene_it_describes() {
         }
     );
     match model.bodies[1].shapes[0].shape {
-        Shape::Capsule {
-            radius,
-            half_length,
-        } => assert!(radius == 0.04 && (half_length - 0.11).abs() < 1e-15),
+        Shape::Hull {
+            cylinder: Some((radius, half_length)),
+            ..
+        } => assert!(radius == 0.04 && (half_length - 0.15).abs() < 1e-15),
         s => panic!("upper is {s:?}"),
     }
     assert_eq!(model.bodies[1].mass, 1.0);
     assert_eq!(model.bodies[1].inertia[(0, 0)], 0.0079);
     assert_eq!(model.bodies[1].inertia[(2, 2)], 0.0008);
-    // The capsule's axis (body z) along world x.
+    // The cylinder's axis (body z) along world x.
     let axis = model.initial[1].orientation * Vector3::z();
     assert!((axis - Vector3::x()).norm() < 1e-12, "{axis:?}");
     let kinds: Vec<&str> = model.joints.iter().map(|j| j.kind()).collect();

@@ -13,6 +13,7 @@ pub use broad::Still;
 mod capsule_box;
 mod capsule_capsule;
 mod capsule_plane;
+mod cylinder;
 mod hull;
 mod manifold;
 mod segment;
@@ -222,6 +223,9 @@ fn shape_plane(
             radius,
             half_length,
         } => capsule_plane::capsule_plane(i, at, (radius, half_length), p, plane, within, out),
+        Shape::Hull {
+            cylinder: Some(rl), ..
+        } => cylinder::cylinder_plane(i, at, rl, p, plane, within, out),
         Shape::Hull { index, .. } => {
             hull::hull_plane(i, at, &model.hulls[index], p, plane, within, out)
         }
@@ -334,8 +338,16 @@ fn shape_pair(
         (Box { half: ha }, Box { half: hb }) => {
             box_box::box_box(a, &pa, &ha, b, &pb, &hb, within, out)
         }
-        (Sphere { radius }, Hull { index, .. }) => {
-            let g = hull::ball_hull(a, pa.x, radius, None, b, &pb, &hulls[index], 0);
+        (
+            Sphere { radius },
+            Hull {
+                index, cylinder, ..
+            },
+        ) => {
+            let g = match cylinder {
+                Some(rl) => cylinder::ball_cylinder(a, pa.x, radius, None, b, &pb, rl, 0),
+                None => hull::ball_hull(a, pa.x, radius, None, b, &pb, &hulls[index], 0),
+            };
             if g.gap <= within {
                 out.push(g);
             }

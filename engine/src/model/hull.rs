@@ -5,6 +5,11 @@
 
 use nalgebra::Vector3;
 
+/// The sides of the prism a cylinder is against boxes, capsules, hulls
+/// and cylinders: its flat sides lie within r (1 - cos(pi / 32)), 0.5 %
+/// of its radius, of the round one.
+pub const CYLINDER_SIDES: usize = 32;
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct Face {
     /// Outward unit normal; `normal . x = offset` on the face.
@@ -49,6 +54,19 @@ impl Hull {
             .expect("a tetrahedron")
         });
         Hull::from_mesh(&h)
+    }
+
+    /// The prism of [`CYLINDER_SIDES`] sides inscribed in a cylinder of
+    /// radius `r` and half length `l` about z (a cylinder against a box,
+    /// capsule, hull or cylinder).
+    pub fn cylinder(r: f64, l: f64) -> Hull {
+        let rims: Vec<[f64; 3]> = (0..CYLINDER_SIDES)
+            .flat_map(|k| {
+                let t = k as f64 * std::f64::consts::TAU / CYLINDER_SIDES as f64;
+                [-l, l].map(|z| [r * t.cos(), r * t.sin(), z])
+            })
+            .collect();
+        Hull::new(&rims)
     }
 
     /// The hull of a box of half extents `h` (for a box against a hull).

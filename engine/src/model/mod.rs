@@ -35,10 +35,14 @@ pub enum Shape {
         half: Vector3<f64>,
     },
     /// A convex hull, `Model::hulls[index]`; `bound` its farthest
-    /// vertex's distance from the shape's origin.
+    /// vertex's distance from the shape's origin. A cylinder (`cylinder`:
+    /// its radius and half length, about z) is the hull of a prism of
+    /// [`hull::CYLINDER_SIDES`] sides against boxes, capsules, hulls and
+    /// cylinders, and itself, exactly, against planes and spheres.
     Hull {
         index: usize,
         bound: f64,
+        cylinder: Option<(f64, f64)>,
     },
 }
 
@@ -54,6 +58,18 @@ impl Shape {
                 Shape::Hull {
                     index: hulls.len() - 1,
                     bound,
+                    cylinder: None,
+                }
+            }
+            D::Cylinder {
+                radius,
+                half_length,
+            } => {
+                hulls.push(hull::Hull::cylinder(radius, half_length));
+                Shape::Hull {
+                    index: hulls.len() - 1,
+                    bound: radius.hypot(half_length),
+                    cylinder: Some((radius, half_length)),
                 }
             }
             D::Sphere { radius } => Shape::Sphere { radius },
@@ -101,6 +117,15 @@ impl Shape {
                 let across =
                     mc * (r * r / 4.0 + l * l / 3.0) + ms * (0.4 * r * r + l * l + 0.75 * l * r);
                 Matrix3::from_diagonal(&Vector3::new(across, across, axial))
+            }
+            // A solid cylinder of radius r and length 2l: m r^2 / 2 about
+            // its axis, m (3 r^2 + 4 l^2) / 12 across.
+            Shape::Hull {
+                cylinder: Some((r, l)),
+                ..
+            } => {
+                let across = mass * (3.0 * r * r + 4.0 * l * l) / 12.0;
+                Matrix3::from_diagonal(&Vector3::new(across, across, 0.5 * mass * r * r))
             }
             // A body with a hull gives its inertia (validated): a ball's
             // of the bound, never used.
@@ -477,11 +502,12 @@ impl Model {
     pub fn from_scene(scene: &Scene) -> Model {
         let v3 = |a: [f64; 3]| Vector3::new(a[0], a[1], a[2]);
         let mut hulls = Vec::new();
-        let any_hull = scene
-            .bodies
-            .iter()
-            .flat_map(|b| b.shapes())
-            .any(|p| matches!(p.shape, cosim_shared::ShapeDesc::Hull { .. }));
+        let any_hull = scene.bodies.iter().flat_map(|b| b.shapes()).any(|p| {
+            matches!(
+                p.shape,
+                cosim_shared::ShapeDesc::Hull { .. } | cosim_shared::ShapeDesc::Cylinder { .. }
+            )
+        });
         let bodies: Vec<Body> = scene
             .bodies
             .iter()

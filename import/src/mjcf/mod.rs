@@ -44,7 +44,7 @@ mod xml;
 use crate::options::{Imported, Options};
 use crate::problems::Problems;
 use crate::UNBOUNDED;
-use cosim_shared::scene::{FrameEntry, MotorDesc, MIN_MOMENT};
+use cosim_shared::scene::{FrameEntry, MotorDesc, ShapeKind, MIN_MOMENT};
 use cosim_shared::{
     BodyDesc, JointDesc, JointKind as Kind, PlaneDesc, Scene, SceneError, ShapeEntry, VisualEntry,
     VisualKind, WORLD,
@@ -830,6 +830,7 @@ impl Builder<'_> {
             half_length: None,
             half_extents: None,
             hull: None,
+            kind: None,
             position: at.translation.vector.into(),
             orientation: [at.rotation.w, at.rotation.i, at.rotation.j, at.rotation.k],
         };
@@ -841,8 +842,9 @@ impl Builder<'_> {
             }
             GeomKind::Box => e.half_extents = Some([a, b, c]),
             GeomKind::Cylinder => {
-                e.hull = Some(cylinder_points(a, b));
-                self.note_once("cylinders are hulls of 2 x 24 points on their rims");
+                e.radius = Some(a);
+                e.half_length = Some(b);
+                e.kind = Some(ShapeKind::Cylinder);
             }
             GeomKind::Ellipsoid => {
                 e.hull = Some(ellipsoid_points(a, b, c));
@@ -1233,18 +1235,6 @@ fn fixed(name: &str, a: &str, b: &str, at: Vector3<f64>) -> JointDesc {
         motor: None,
         max_effort: None,
     }
-}
-
-/// A cylinder's hull points: two rims of 24.
-fn cylinder_points(r: f64, half: f64) -> Vec<[f64; 3]> {
-    let mut out = Vec::new();
-    for k in 0..24 {
-        let t = k as f64 * std::f64::consts::TAU / 24.0;
-        for z in [-half, half] {
-            out.push([r * t.cos(), r * t.sin(), z]);
-        }
-    }
-    out
 }
 
 /// An ellipsoid's hull points: poles and 5 rings of 12.

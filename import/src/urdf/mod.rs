@@ -31,9 +31,9 @@
 //!   lowest point.
 //!
 //! Not modelled yet, and said when a file has them:
-//! `<mimic>` (the joint moves on its own). Cylinders are capsules of the
-//! same radius and overall length (said). Meshes are not read yet
-//! (issue 45, point 2): a problem each, with the file they resolve to.
+//! `<mimic>` (the joint moves on its own). Cylinders are cylinders
+//! (`collision/cylinder.rs`); meshes their convex hulls, a mesh that
+//! cannot be found or read a problem, with the file it resolves to.
 
 mod package;
 mod read;
@@ -409,7 +409,7 @@ impl Tree {
             );
             for (l, c) in shapes {
                 if let Some((shape, support)) =
-                    shape_text(c, &links[l].name, dir, &mut meshes, problems, notes)
+                    shape_text(c, &links[l].name, dir, &mut meshes, problems)
                 {
                     *lowest = lowest.min(support.lowest(&(self.frame[l] * c.origin)));
                     let pose = at.inverse() * self.frame[l] * c.origin;
@@ -737,6 +737,7 @@ fn motion(j: &read::Joint, q: f64) -> Isometry3<f64> {
 /// length along z; a ball's is 0), a box (half extents), a hull (points).
 enum Support {
     Capsule(f64, f64),
+    Cylinder(f64, f64),
     Box([f64; 3]),
     Points(Vec<[f64; 3]>),
 }
@@ -749,6 +750,11 @@ impl Support {
         let up = r.matrix().row(2);
         match self {
             Support::Capsule(radius, half) => z - radius - half * up[2].abs(),
+            // The lowest rim point: the axis's rise over an end, the
+            // radius across it.
+            Support::Cylinder(radius, half) => {
+                z - half * up[2].abs() - radius * (1.0 - up[2] * up[2]).max(0.0).sqrt()
+            }
             Support::Box(h) => z - (0..3).map(|k| h[k] * up[k].abs()).sum::<f64>(),
             Support::Points(p) => p
                 .iter()
@@ -828,7 +834,6 @@ fn shape_text(
     dir: Option<&Path>,
     meshes: &mut crate::mesh::Meshes,
     problems: &mut Problems,
-    notes: &mut Vec<String>,
 ) -> Option<(String, Support)> {
     Some(match &c.geometry {
         Geometry::Sphere(r) => (format!("radius = {r:?}\n"), Support::Capsule(*r, 0.0)),
@@ -843,21 +848,13 @@ fn shape_text(
             format!("radius = {radius:?}\nhalf_length = {:?}\n", length / 2.0),
             Support::Capsule(*radius, length / 2.0),
         ),
-        Geometry::Cylinder { radius, length } => {
-            let half = length / 2.0 - radius;
-            notes.push(format!(
-                "link {link:?}: a cylinder is a capsule here (same radius and overall length)"
-            ));
-            if half > 0.0 {
-                (
-                    format!("radius = {radius:?}\nhalf_length = {half:?}\n"),
-                    Support::Capsule(*radius, half),
-                )
-            } else {
-                let r = radius.max(length / 2.0);
-                (format!("radius = {r:?}\n"), Support::Capsule(r, 0.0))
-            }
-        }
+        Geometry::Cylinder { radius, length } => (
+            format!(
+                "type = \"cylinder\"\nradius = {radius:?}\nhalf_length = {:?}\n",
+                length / 2.0
+            ),
+            Support::Cylinder(*radius, length / 2.0),
+        ),
         Geometry::Mesh { filename, scale } => {
             let what = format!("link {link:?} <collision>");
             let hull = package::resolve(filename, dir).and_then(|p| meshes.hull(&p, *scale));

@@ -88,11 +88,23 @@ pub struct ShapeEntry {
     /// Instead of the above: the convex hull of these points.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hull: Option<Vec<[f64; 3]>>,
+    /// `"cylinder"` with `radius` and `half_length`: a cylinder about the
+    /// shape's z axis (flat ends at +-half_length) instead of a capsule.
+    #[serde(rename = "type", default, skip_serializing_if = "Option::is_none")]
+    pub kind: Option<ShapeKind>,
     #[serde(default)]
     pub position: [f64; 3],
     /// Unit quaternion, scalar first.
     #[serde(default = "identity_quaternion")]
     pub orientation: [f64; 4],
+}
+
+/// `[[body.shape]] type`: what the fields make is named (only a cylinder
+/// needs it: radius and half_length alone make a capsule).
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum ShapeKind {
+    Cylinder,
 }
 
 /// A shape at its pose in its body's frame (`BodyDesc::shapes`).
@@ -140,6 +152,12 @@ pub enum ShapeDesc {
     Box {
         half_extents: [f64; 3],
     },
+    /// A solid cylinder about the body's z axis, its flat ends
+    /// `half_length` either side of its centre.
+    Cylinder {
+        radius: f64,
+        half_length: f64,
+    },
     /// The convex hull of these points (a collision mesh's, as MuJoCo and
     /// PyBullet take it), in the shape's frame.
     Hull {
@@ -182,9 +200,22 @@ fn shape_of(
 
 impl ShapeEntry {
     pub fn shape_or_error(&self) -> Result<ShapeDesc, (&'static str, String)> {
-        match &self.hull {
-            None => shape_of(self.radius, self.half_length, self.half_extents),
-            Some(points)
+        match (&self.hull, self.kind) {
+            (None, Some(ShapeKind::Cylinder)) => match (self.radius, self.half_length) {
+                (Some(radius), Some(half_length)) if self.half_extents.is_none() => {
+                    Ok(ShapeDesc::Cylinder {
+                        radius,
+                        half_length,
+                    })
+                }
+                _ => Err((
+                    "type",
+                    "= \"cylinder\": a cylinder is radius and half_length alone".into(),
+                )),
+            },
+            (Some(_), Some(_)) => Err(("type", "with hull: a hull is its points alone".into())),
+            (None, None) => shape_of(self.radius, self.half_length, self.half_extents),
+            (Some(points), None)
                 if self.radius.is_none()
                     && self.half_length.is_none()
                     && self.half_extents.is_none() =>
@@ -193,7 +224,7 @@ impl ShapeEntry {
                     points: points.clone(),
                 })
             }
-            Some(_) => Err((
+            (Some(_), None) => Err((
                 "hull",
                 "with radius, half_length or half_extents: a shape is one of them".into(),
             )),

@@ -504,6 +504,10 @@ fn check_shape(
         ShapeDesc::Capsule {
             radius,
             half_length,
+        }
+        | ShapeDesc::Cylinder {
+            radius,
+            half_length,
         } => {
             positive(radius).map_err(|m| (field("radius"), m))?;
             positive(half_length).map_err(|m| (field("half_length"), m))

@@ -1,0 +1,160 @@
+//! Cylinders (issue 45, point 2): exact against planes and balls, their
+//! prism (`Hull::cylinder`, 32 sides) against boxes, capsules, hulls and
+//! cylinders.
+
+use cosim_tests::*;
+use nalgebra::{UnitQuaternion, Vector3};
+
+const FLOOR: &str = "[[plane]]\nname = \"floor\"\nnormal = [0.0, 0.0, 1.0]\npoint = [0.0, 0.0, 0.0]\nfriction = 0.5\n\n";
+
+/// A body of one cylinder (radius `r`, half length `l`) at `position`,
+/// turned by `orientation` (scalar first), moving at `v`, spinning at `w`.
+fn cylinder(
+    name: &str,
+    (r, l): (f64, f64),
+    position: [f64; 3],
+    orientation: [f64; 4],
+    (v, w): ([f64; 3], [f64; 3]),
+) -> String {
+    format!(
+        "[[body]]\nname = \"{name}\"\nmass = 1.0\nposition = {position:?}\norientation = {orientation:?}\n\
+         velocity = {v:?}\nangular_velocity = {w:?}\nfriction = 0.5\n\
+         [[body.shape]]\ntype = \"cylinder\"\nradius = {r:?}\nhalf_length = {l:?}\n\n"
+    )
+}
+
+/// A cylinder at rest standing on an end, its centre `z` above the origin.
+fn standing(name: &str, (r, l): (f64, f64), z: f64) -> String {
+    cylinder(
+        name,
+        (r, l),
+        [0.0, 0.0, z],
+        [1.0, 0.0, 0.0, 0.0],
+        ([0.0; 3], [0.0; 3]),
+    )
+}
+
+/// Standing on an end it rests on its rim, still: the centre at l above
+/// the floor to the solver's tolerance, no speed left, its inertia the
+/// solid cylinder's (m r^2 / 2 about the axis, m (3 r^2 + 4 l^2) / 12
+/// across).
+#[test]
+fn a_standing_cylinder_rests_on_its_rim() {
+    let (r, l) = (0.1, 0.2);
+    let s = sim(1e-3, 1000, [0.0, 0.0, -G]) + FLOOR + &standing("can", (r, l), l);
+    let mut e = engine(&s);
+    let i = e.model().bodies[0].inertia;
+    assert!((i[(2, 2)] - 0.5 * r * r).abs() < 1e-15);
+    assert!((i[(0, 0)] - (3.0 * r * r + 4.0 * l * l) / 12.0).abs() < 1e-15);
+    let mut most = 0;
+    run(&mut e, 1000, |_, r| most = most.max(r.active_contacts));
+    let b = e.state().bodies[0];
+    assert!((b.x.z - l).abs() < 1e-6, "z = {}", b.x.z);
+    assert!(b.v.norm() < 1e-9 && b.w.norm() < 1e-9, "{} {}", b.v, b.w);
+    assert!(most >= 3, "rests on {most} rim points");
+}
+
+/// Lying on its side and rolling (v = w r along the floor) it keeps its
+/// height and its speed: the round side, not a prism's flats (a prism of
+/// 32 sides would lift the centre by r (1 - cos(pi / 32)) = 4.8e-4 m
+/// each thirty-second of a turn).
+#[test]
+fn a_cylinder_rolls_on_its_round_side() {
+    let (r, l) = (0.1, 0.05);
+    // Axis along world y: a quarter turn about x.
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let (v, w) = (1.0, 1.0 / r);
+    let s = sim(1e-3, 2000, [0.0, 0.0, -G])
+        + FLOOR
+        + &cylinder(
+            "wheel",
+            (r, l),
+            [0.0, 0.0, r],
+            [h, h, 0.0, 0.0],
+            ([v, 0.0, 0.0], [0.0, w, 0.0]),
+        );
+    let mut e = engine(&s);
+    let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
+    run(&mut e, 2000, |e, _| {
+        let z = e.state().bodies[0].x.z;
+        (low, high) = (low.min(z), high.max(z));
+    });
+    let b = e.state().bodies[0];
+    assert!(
+        high - low < 1e-5,
+        "the centre moved between {low} and {high}"
+    );
+    assert!((b.v.x - v).abs() < 1e-3, "v = {}", b.v);
+    // Two seconds at 1 m/s: five turns and more.
+    assert!(b.x.x > 1.9, "x = {}", b.x.x);
+}
+
+/// A ball on a standing cylinder's top end rests there, and one against
+/// its side meets the round side: the ball's centre stays r + R from the
+/// axis (the exact surface, not a prism's).
+#[test]
+fn a_ball_meets_a_cylinders_true_surface() {
+    let (r, l, rb) = (0.1, 0.2, 0.05);
+    let ball = |x: [f64; 3]| sphere("ball", rb, 1.0, x, [0.0; 3], 0.5, 0.0);
+    // On the top end.
+    let s = sim(1e-3, 500, [0.0, 0.0, -G])
+        + FLOOR
+        + &standing("can", (r, l), l)
+        + &ball([0.03, 0.0, 2.0 * l + rb]);
+    let mut e = engine(&s);
+    run(&mut e, 500, |_, _| {});
+    let z = e.state().bodies[1].x.z;
+    assert!((z - (2.0 * l + rb)).abs() < 1e-6, "the ball at {z}");
+    // Against the side, in zero gravity: pressed towards the axis at an
+    // angle between two of the prism's corners, it stops at r + R.
+    let t = 0.5 * std::f64::consts::TAU / 32.0;
+    let dir = Vector3::new(t.cos(), t.sin(), 0.0);
+    let start = dir * (r + rb + 0.01);
+    let s = sim(1e-3, 300, [0.0; 3])
+        + &standing("post", (r, l), 0.0)
+        + &sphere("ball", rb, 1.0, start.into(), (-dir * 0.1).into(), 0.0, 0.0);
+    let mut e = engine(&s);
+    let mut closest = f64::INFINITY;
+    run(&mut e, 300, |e, _| {
+        let s = e.state();
+        let d = (s.bodies[1].x - s.bodies[0].x).xy().norm();
+        closest = closest.min(d);
+    });
+    assert!((closest - (r + rb)).abs() < 1e-6, "closest {closest}");
+}
+
+/// A cylinder standing on a box (its prism against the box) rests still,
+/// and one tipped over lies on its side on the floor: it ends with its
+/// axis level and its centre r above the floor (within the prism's 0.5 %
+/// only where it touches the box, not the floor).
+#[test]
+fn a_cylinder_stands_on_a_box_and_a_tipped_one_lies_on_the_floor() {
+    let (r, l) = (0.05, 0.1);
+    let table = cuboid(
+        "table",
+        [0.3, 0.3, 0.1],
+        10.0,
+        [0.0, 0.0, 0.1],
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0; 3],
+        [0.0; 3],
+        0.5,
+    );
+    let tipped = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 1.2);
+    let q = [tipped.w, tipped.i, tipped.j, tipped.k];
+    let s = sim(1e-3, 3000, [0.0, 0.0, -G])
+        + FLOOR
+        + &table
+        + &standing("can", (r, l), 0.2 + l)
+        + &cylinder("log", (r, l), [1.0, 0.0, l + 0.01], q, ([0.0; 3], [0.0; 3]));
+    let mut e = engine(&s);
+    run(&mut e, 3000, |_, _| {});
+    let st = e.state();
+    let can = st.bodies[1];
+    assert!((can.x.z - (0.2 + l)).abs() < 1e-4, "the can at {}", can.x.z);
+    assert!(can.v.norm() < 1e-6, "the can moves at {}", can.v);
+    let log = st.bodies[2];
+    let axis = log.q * Vector3::z();
+    assert!(axis.z.abs() < 1e-6, "the log's axis {axis}");
+    assert!((log.x.z - r).abs() < 1e-6, "the log at {}", log.x.z);
+}
