@@ -76,7 +76,9 @@ pub(crate) fn build(scene: &Scene, sleep: bool) -> World {
             } => ColliderBuilder::capsule_z(half_length, radius),
             ShapeDesc::Box { half_extents: h } => ColliderBuilder::cuboid(h[0], h[1], h[2]),
             // A body's own fields give no hull (only `[[body.shape]]`).
-            ShapeDesc::Hull { .. } => unreachable!("a body's own shape is never a hull"),
+            ShapeDesc::Hull { .. } | ShapeDesc::Cylinder { .. } => {
+                unreachable!("a body's own shape is never a hull or a cylinder")
+            }
         }
         .mass(b.mass)
         .friction(b.friction)
