@@ -954,17 +954,16 @@ impl Builder<'_> {
                         .into_iter()
                         .flatten()
                         .any(|r| r[0] != -r[1]);
-                    self.notes.push(match effort {
-                        Some(e) if asymmetric => format!(
-                            "{label}: a torque on joint {joint:?} (gear {g}), set by the controller, within +-{e} (its ranges are not symmetric: the wider side is taken)"
-                        ),
-                        Some(e) => format!(
-                            "{label}: a torque on joint {joint:?} (gear {g}), set by the controller, within +-{e}"
-                        ),
-                        None => format!(
-                            "{label}: a torque on joint {joint:?} (gear {g}), set by the controller"
-                        ),
-                    });
+                    let mut note = format!(
+                        "{label}: a torque on joint {joint:?} (gear {g}), set by the controller"
+                    );
+                    if let Some(e) = effort {
+                        note += &format!(", within +-{e}");
+                        if asymmetric {
+                            note += " (its ranges are not symmetric: the wider side is taken)";
+                        }
+                    }
+                    self.notes.push(note);
                     if let Some(e) = effort.filter(|e| *e > 0.0) {
                         scene.joints[s].max_effort = Some(e);
                     }

@@ -498,7 +498,8 @@ impl Tree {
             }
             let at = self.frame[p] * j.origin;
             // A URDF's links and joints have names of their own kinds; a
-            // scene's are one set: a joint named as a body is renamed.
+            // scene's are one set: a joint named as a link (a body, a
+            // frame) or as the world is renamed.
             let name = if body_name.contains(&j.name) || links.iter().any(|l| l.name == j.name) {
                 let renamed = format!("{}_joint", j.name);
                 notes.push(format!(
@@ -539,14 +540,22 @@ impl Tree {
                 let _ = writeln!(s, "position = {q:?}");
             }
             // The effort limit bounds a controller's torque (MuJoCo's
-            // actuatorfrcrange from a URDF's effort).
-            if let (Some(e), true) = (j.effort.filter(|&e| e > 0.0), hinge_or_slider) {
+            // actuatorfrcrange from a URDF's effort) and whatever drives
+            // the joint.
+            let effort = j.effort.filter(|&e| e > 0.0);
+            if let (Some(e), true) = (effort, hinge_or_slider) {
                 let _ = writeln!(s, "max_effort = {e:?}");
             }
             if let (Some(servo), true) = (options.servo, hinge_or_slider) {
+                if j.damping > 0.0 {
+                    notes.push(format!(
+                        "joint {:?}: the servo drives it: its <dynamics damping> is left out",
+                        j.name
+                    ));
+                }
                 // The file's effort limit bounds it (MuJoCo's forcerange
                 // from a URDF's effort), unless the servo gives its own.
-                match servo.max_effort.or(j.effort.filter(|&e| e > 0.0)) {
+                match servo.max_effort.or(effort) {
                     Some(f) => {
                         let _ = writeln!(
                             s,
@@ -572,7 +581,7 @@ impl Tree {
                 // by the joint's effort limit where it has one (a huge
                 // bound beside the step's small impulses makes Lemke's
                 // pivots lose precision).
-                let bound = j.effort.filter(|&e| e > 0.0).unwrap_or(UNBOUNDED);
+                let bound = effort.unwrap_or(UNBOUNDED);
                 let _ = writeln!(
                     s,
                     "motor = {{ speed = 0.0, kv = {:?}, max_effort = {bound:?} }}",
@@ -590,12 +599,6 @@ impl Tree {
                     "motor = {{ speed = 0.0, max_effort = {:?} }}",
                     j.friction
                 );
-            }
-            if options.servo.is_some() && j.damping > 0.0 && hinge_or_slider {
-                notes.push(format!(
-                    "joint {:?}: the servo drives it: its <dynamics damping> is left out",
-                    j.name
-                ));
             }
             if !hinge_or_slider && (j.damping > 0.0 || j.friction > 0.0) {
                 notes.push(format!(
