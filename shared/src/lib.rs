@@ -36,5 +36,5 @@ pub use scene::{
     contact_label, BodyDesc, CameraDesc, FrameEntry, FrictionCone, JointDesc, JointKind, PgsDesc,
     PgsStop, PlacedShape, PlaneDesc, PositionUpdate, RobotDesc, Scene, SceneError, ServoDesc,
     ShapeDesc, ShapeEntry, SimDesc, SleepDesc, SolverChoice, VisualEntry, VisualKind,
-    DEFAULT_PGS_MAX_ITERATIONS, DEFAULT_PGS_TOLERANCE, MAX_FEATURES, WORLD,
+    DEFAULT_PGS_MAX_ITERATIONS, DEFAULT_PGS_RELATIVE, DEFAULT_PGS_TOLERANCE, MAX_FEATURES, WORLD,
 };

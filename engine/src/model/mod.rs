@@ -764,6 +764,7 @@ impl Model {
                     velocity_tolerance: d.tolerance,
                     max_iterations: d.max_iterations,
                     stop: d.stop,
+                    relative: d.relative,
                     ..Default::default()
                 }),
             },

@@ -145,6 +145,9 @@ pub const DEFAULT_MAX_ITERATIONS: usize = cosim_shared::DEFAULT_PGS_MAX_ITERATIO
 /// Default physical stopping tolerance (m/s): see [`Pgs::solve`].
 pub const DEFAULT_VELOCITY_TOLERANCE: f64 = cosim_shared::DEFAULT_PGS_TOLERANCE;
 
+/// Default relative part of the residual rule's tolerance.
+pub const DEFAULT_RELATIVE: f64 = cosim_shared::DEFAULT_PGS_RELATIVE;
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PgsParams {
     pub tolerance: f64,
@@ -157,6 +160,10 @@ pub struct PgsParams {
     pub momentum: bool,
     /// How `velocity_tolerance` stops the iteration.
     pub stop: Stop,
+    /// Under the residual rule, an island's tolerance is at least this
+    /// fraction of its fastest approach at the free velocity (see
+    /// `Pgs::iterate`); 0: the tolerance alone.
+    pub relative: f64,
 }
 
 /// What `velocity_tolerance` bounds when PGS stops (the scene's `[sim.pgs]
@@ -193,6 +200,7 @@ impl Default for PgsParams {
             velocity_tolerance: DEFAULT_VELOCITY_TOLERANCE,
             momentum: true,
             stop: Stop::Residual,
+            relative: DEFAULT_RELATIVE,
         }
     }
 }

@@ -170,6 +170,11 @@ pub enum BenchWhat {
         /// PGS: sweep cap.
         #[arg(long, default_value_t = crate::engine::solver::pgs::DEFAULT_MAX_ITERATIONS)]
         max_iterations: usize,
+        /// PGS, residual rule: an island's tolerance is at least this
+        /// fraction of its fastest approach (`[sim.pgs] relative`; 0: the
+        /// tolerance alone).
+        #[arg(long, default_value_t = cosim_shared::DEFAULT_PGS_RELATIVE)]
+        relative: f64,
         /// PGS: what the velocity tolerance bounds, `distance` (to the
         /// answer) or `residual` (the constraint violation).
         #[arg(long, default_value = "residual")]
@@ -519,6 +524,7 @@ pub fn main() -> ExitCode {
                     trace,
                     velocity_tolerance,
                     max_iterations,
+                    relative,
                     stop,
                     no_momentum,
                     relaxation,
@@ -539,6 +545,7 @@ pub fn main() -> ExitCode {
                     momentum: !no_momentum,
                     relaxation,
                     stop,
+                    relative,
                     ..Default::default()
                 },
                 seed,

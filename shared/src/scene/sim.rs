@@ -187,6 +187,13 @@ pub struct PgsDesc {
     /// The sweep cap: a safety net.
     #[serde(default = "default_pgs_max_iterations")]
     pub max_iterations: usize,
+    /// Residual rule only: an island's tolerance is at least this fraction
+    /// of the fastest speed at which its contacts approach at the step's
+    /// start (ODEs' relative tolerance beside the absolute one), so that a
+    /// landing at metres a second is not solved to the centimetre a second
+    /// of a pile at rest; 0: the tolerance alone. In [0, 1).
+    #[serde(default = "default_pgs_relative")]
+    pub relative: f64,
 }
 
 /// `[sim.pgs] stop`: what the tolerance bounds when PGS stops.
@@ -228,9 +235,13 @@ impl std::str::FromStr for PgsStop {
 /// stabilisation takes back (`bench pile`'s rule, measured there).
 pub const DEFAULT_PGS_TOLERANCE: f64 = 1e-2;
 pub const DEFAULT_PGS_MAX_ITERATIONS: usize = 5000;
+pub const DEFAULT_PGS_RELATIVE: f64 = 1e-2;
 
 fn default_pgs_tolerance() -> f64 {
     DEFAULT_PGS_TOLERANCE
+}
+fn default_pgs_relative() -> f64 {
+    DEFAULT_PGS_RELATIVE
 }
 fn default_pgs_max_iterations() -> usize {
     DEFAULT_PGS_MAX_ITERATIONS

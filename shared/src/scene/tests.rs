@@ -31,7 +31,14 @@ fn pgs_stopping_rule_is_read_and_checked() {
     let pgs = s.sim.pgs.expect("read");
     assert_eq!((pgs.stop, pgs.tolerance), (PgsStop::Residual, 0.01));
     assert_eq!(pgs.max_iterations, 5000);
+    assert_eq!(pgs.relative, crate::DEFAULT_PGS_RELATIVE);
     assert_eq!(Scene::parse(&s.to_toml(), "again.toml"), Ok(s));
+    let s = Scene::parse(&with("relative = 0.0"), "t.toml").expect("valid");
+    assert_eq!(s.sim.pgs.map(|p| p.relative), Some(0.0));
+    for bad in ["relative = 1.0", "relative = -0.1"] {
+        let e = Scene::parse(&with(bad), "t.toml").unwrap_err();
+        assert_eq!(e.field, "sim.pgs.relative", "{e}");
+    }
     let e = Scene::parse(&with("tolerance = -1.0"), "t.toml").unwrap_err();
     assert_eq!(e.field, "sim.pgs.tolerance", "{e}");
     let e = Scene::parse(&with("max_iterations = 0"), "t.toml").unwrap_err();

@@ -77,6 +77,12 @@ impl Scene {
         }
         if let Some(pgs) = &sim.pgs {
             positive(pgs.tolerance).map_err(|m| err("sim.pgs.tolerance".into(), m))?;
+            if !(0.0..1.0).contains(&pgs.relative) {
+                return Err(err(
+                    "sim.pgs.relative".into(),
+                    format!("= {}: must be in [0, 1)", pgs.relative),
+                ));
+            }
             if pgs.max_iterations == 0 {
                 return Err(err(
                     "sim.pgs.max_iterations".into(),

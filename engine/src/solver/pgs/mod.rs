@@ -348,6 +348,16 @@ impl Pgs {
         g: usize,
         nu: &mut [f64],
     ) -> (usize, bool) {
+        let tolerance = match params.stop {
+            Stop::Residual if params.relative > 0.0 => params
+                .velocity_tolerance
+                .max(params.relative * self.fastest_approach(p, g)),
+            _ => params.velocity_tolerance,
+        };
+        let params = &PgsParams {
+            velocity_tolerance: tolerance,
+            ..*params
+        };
         let mut last_g2 = 0.0;
         let mut recent = [f64::INFINITY; RATE_WINDOW + 1];
         let cap = params.max_iterations.max(1);
@@ -406,6 +416,18 @@ impl Pgs {
             }
         }
         (cap, false)
+    }
+
+    /// The largest normal speed (m/s) of island `g`'s contacts at the
+    /// free velocity: how fast its bodies come together this step.
+    fn fastest_approach(&self, p: &PgsProblem, g: usize) -> f64 {
+        let normals = p.nb..p.nb + p.nc;
+        p.groups
+            .rows_of(g)
+            .iter()
+            .filter(|&&k| normals.contains(&(k as usize)))
+            .map(|&k| p.rows[k as usize].velocity(p.nu_free).abs())
+            .fold(0.0, f64::max)
     }
 
     /// The iterate `x` from the impulses `lambda` of every row.
