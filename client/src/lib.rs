@@ -21,12 +21,14 @@ mod controller;
 mod monitor;
 mod names;
 mod reader;
+mod spin;
 
 pub use connection::{Connection, CONTROL_TIMEOUT};
 pub use controller::Controller;
 pub use monitor::Monitor;
 pub use names::{Frame, Names};
 use reader::StateReader;
+pub use spin::{SpinRule, HYBRID_SPIN};
 
 pub use cosim_shared as shared;
 pub use cosim_shared::wire::*;
@@ -49,7 +51,9 @@ pub enum WaitMode {
     Spin,
     /// Sleep on an iceoryx2 event until woken.
     Block,
-    /// Spin for a bounded time ([`HYBRID_SPIN`]), then block.
+    /// Spin while spinning pays, then block ([`SpinRule`]): at most
+    /// twice the recent waits and [`HYBRID_SPIN`], and not at all for a
+    /// while after a spin was preempted (processes outnumber cores).
     #[default]
     Hybrid,
 }
@@ -63,12 +67,6 @@ impl WaitMode {
         }
     }
 }
-
-/// Spinning time of [`WaitMode::Hybrid`] before it blocks: a few step
-/// computations of the reference scene (about 20 us each), so that a
-/// controller on its own core wakes at spinning speed while one sharing a
-/// core yields soon.
-pub const HYBRID_SPIN: Duration = Duration::from_micros(200);
 
 /// What went wrong, with the server or service named.
 #[derive(Debug, Clone, PartialEq)]

@@ -19,6 +19,8 @@ pub(crate) struct StateReader {
     /// None for a polling reader: the server's event then has one listener
     /// less to notify every step.
     ready: Option<Listener<ipc::Service>>,
+    /// The hybrid wait's rule, carried from wait to wait.
+    spin: std::cell::Cell<crate::SpinRule>,
 }
 
 impl StateReader {
@@ -78,6 +80,7 @@ impl StateReader {
             service,
             sub,
             ready,
+            spin: Default::default(),
         })
     }
 
@@ -147,23 +150,31 @@ impl StateReader {
         into: &mut StateFrame,
     ) -> Result<(), ClientError> {
         let start = Instant::now();
+        let mut rule = self.spin.get();
         let spin_for = match mode {
             WaitMode::Spin => timeout,
             WaitMode::Block => Duration::ZERO,
-            WaitMode::Hybrid => HYBRID_SPIN.min(timeout),
+            WaitMode::Hybrid => rule.budget().min(timeout),
         };
+        let mut spinning = !spin_for.is_zero();
+        let mut last = start;
         let mut spins = 0u32;
         let mut check = GoneCheck::new();
         loop {
             if let Some(sample) = self.receive(newest)? {
                 if accept(sample.user_header()) {
+                    if mode == WaitMode::Hybrid {
+                        rule.finished(start.elapsed(), spinning);
+                        self.spin.set(rule);
+                    }
                     return into
                         .read(sample.user_header(), sample.payload())
                         .map_err(ClientError::BadFrame);
                 }
                 continue;
             }
-            let elapsed = start.elapsed();
+            let now = Instant::now();
+            let elapsed = now - start;
             if elapsed >= timeout {
                 return Err(ClientError::Timeout {
                     what: "state frame",
@@ -178,7 +189,21 @@ impl StateReader {
                     name: self.name.clone(),
                 });
             }
-            if elapsed < spin_for {
+            // A hybrid spin that ran out or was off its core has failed:
+            // the rest of the wait blocks (`SpinRule`).
+            if spinning && mode == WaitMode::Hybrid {
+                if elapsed >= spin_for {
+                    rule.failed();
+                }
+                if elapsed >= spin_for || rule.preempted(last, now) {
+                    spinning = false;
+                    self.spin.set(rule);
+                }
+            } else if spinning && elapsed >= spin_for {
+                spinning = false;
+            }
+            if spinning {
+                last = now;
                 spins = spins.wrapping_add(1);
                 std::hint::spin_loop();
                 // A termination request must still end a spinning wait.

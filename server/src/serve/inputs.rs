@@ -22,12 +22,14 @@ impl Server {
             return Ok((Flow::Go, Instant::now()));
         }
         let deadline = published + self.opts.deadline;
-        let spin_until = published
-            + match self.opts.wait {
-                WaitMode::Spin => self.opts.deadline,
-                WaitMode::Block => Duration::ZERO,
-                WaitMode::Hybrid => cosim_client::HYBRID_SPIN,
-            };
+        let spin_for = match self.opts.wait {
+            WaitMode::Spin => self.opts.deadline,
+            WaitMode::Block => Duration::ZERO,
+            WaitMode::Hybrid => self.spin.budget(),
+        };
+        let spin_until = published + spin_for;
+        let mut spinning = !spin_for.is_zero();
+        let mut last = Instant::now();
         // A controller that is late is checked for having gone, first after
         // DEPARTURE_CHECK and then every DEPARTURE_CHECK: an answer in time
         // costs no check.
@@ -46,6 +48,9 @@ impl Server {
             }
             if done {
                 let now = Instant::now();
+                if self.opts.wait == WaitMode::Hybrid {
+                    self.spin.finished(now - published, spinning);
+                }
                 self.c.round_trips.add(us(self.frame_out, now));
                 return Ok((Flow::Go, now));
             }
@@ -70,7 +75,20 @@ impl Server {
                     continue;
                 }
             }
-            if now < spin_until {
+            // A hybrid spin that ran out or was off its core has failed:
+            // the rest of the wait blocks (`cosim_client::SpinRule`).
+            if spinning && self.opts.wait == WaitMode::Hybrid {
+                if now >= spin_until {
+                    self.spin.failed();
+                    spinning = false;
+                } else if self.spin.preempted(last, now) {
+                    spinning = false;
+                }
+            } else if spinning && now >= spin_until {
+                spinning = false;
+            }
+            if spinning {
+                last = now;
                 std::hint::spin_loop();
             } else {
                 self.svc.block(deadline.min(next_check) - now)?;

@@ -287,6 +287,8 @@ struct Server {
     /// Senders (input publisher, reason) of rejected inputs that are no
     /// joined controller, logged once each (at most 64 kept).
     unjoined_logged: Vec<(u128, u32)>,
+    /// The hybrid wait's rule for the inputs (`cosim_client::SpinRule`).
+    spin: cosim_client::SpinRule,
 }
 
 /// Runs a server on `scene` until `--steps`, a shutdown request or a
@@ -363,6 +365,7 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         frame_out: Instant::now(),
         last_written: None,
         unjoined_logged: Vec::with_capacity(64),
+        spin: Default::default(),
         engine,
         svc,
         opts,

@@ -40,6 +40,19 @@ pub(super) fn lockstep_of(
     steps: u64,
     sidecar: Option<&str>,
 ) -> Result<Lockstep, BoxError> {
+    lockstep_on(client, controllers, mode, steps, sidecar, None)
+}
+
+/// [`lockstep_of`] with the controllers on `cores` (a taskset list)
+/// instead of core 1 for one and every core for several.
+pub(super) fn lockstep_on(
+    client: Client,
+    controllers: usize,
+    mode: WaitMode,
+    steps: u64,
+    sidecar: Option<&str>,
+    cores: Option<&str>,
+) -> Result<Lockstep, BoxError> {
     let mut name = run_name(controllers, mode, sidecar);
     if client == Client::Python {
         name.push_str("-py");
@@ -70,10 +83,10 @@ pub(super) fn lockstep_of(
     let mut peers = Vec::new();
     for _ in 0..controllers {
         // One controller gets core 1; several share every core.
-        let cores = if controllers == 1 {
-            "1".to_string()
-        } else {
-            all_cores()
+        let cores = match cores {
+            Some(c) => c.to_string(),
+            None if controllers == 1 => "1".to_string(),
+            None => all_cores(),
         };
         peers.push(match client {
             Client::Rust => peer_on(

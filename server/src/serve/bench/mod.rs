@@ -95,6 +95,22 @@ pub fn run(steps: u64, quick: bool) -> Result<String, BoxError> {
             rows.push((n, mode, r));
         }
     }
+    // One controller on the server's own core (issue 47, point 3): the
+    // case where spinning holds the core the other process needs.
+    if pinned && !quick {
+        for mode in [WaitMode::Spin, WaitMode::Block, WaitMode::Hybrid] {
+            let s = if mode == WaitMode::Spin {
+                steps / 10
+            } else {
+                steps
+            };
+            let r = lockstep_on(Client::Rust, 1, mode, s.max(100), None, Some("0"))?;
+            out.push_str(&r.row(&format!(
+                "1 controller on the server's core, {}",
+                mode.as_str()
+            )));
+        }
+    }
     // The Python package's controller (issue 16, point 9), where python3
     // has it: the same loop, answered from Python.
     if python_package() {
