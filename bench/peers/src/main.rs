@@ -121,9 +121,10 @@ fn piles(args: &Args) -> ExitCode {
         }
     }
     let table = format!(
-        "# Pile, ours and Rapier\n\nMachine: {}.\n\n{}",
+        "# Pile, ours and Rapier\n\nMachine: {}.\n\n{}\nFitted slope of the mean time per step against N (log-log):\n\n{}",
         accuracy::machine(),
-        pile::table(&rows, &settings)
+        pile::table(&rows, &settings),
+        pile::slopes(&rows)
     );
     println!("{table}");
     match pile::figures(&rows, &args.out, &accuracy::machine()) {

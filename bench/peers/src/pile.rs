@@ -192,6 +192,26 @@ pub fn slope(points: &[(f64, f64)]) -> Option<f64> {
 }
 
 /// The curves of the rows: one per engine and setting, points by N.
+/// Each engine and setting's fitted slope of mean time per step against
+/// N (log-log), as lines of text (issue 47, point 4).
+pub fn slopes(rows: &[Row]) -> String {
+    curves(rows)
+        .iter()
+        .map(|(key, pts)| {
+            let line: Vec<(f64, f64)> = pts.iter().map(|r| (r.n as f64, mean_ms(r))).collect();
+            let sizes = pts
+                .iter()
+                .map(|r| r.n.to_string())
+                .collect::<Vec<_>>()
+                .join(", ");
+            match slope(&line) {
+                Some(s) => format!("- {key}: slope {s:.2} (N = {sizes})\n"),
+                None => format!("- {key}: one size\n"),
+            }
+        })
+        .collect()
+}
+
 fn curves(rows: &[Row]) -> Vec<(String, Vec<&Row>)> {
     let mut out: Vec<(String, Vec<&Row>)> = Vec::new();
     for r in rows {
@@ -463,5 +483,32 @@ mod tests {
             .collect();
         assert!((super::slope(&pts).unwrap() - 1.1).abs() < 1e-12);
         assert_eq!(super::slope(&pts[..1]), None);
+    }
+
+    #[test]
+    fn each_setting_gets_its_own_slope_line() {
+        let row = |engine: &str, n: usize, ms: f64| super::Row {
+            engine: engine.into(),
+            setting: "default".into(),
+            n,
+            steps: 100,
+            median_ms: ms,
+            total_s: ms * 0.1,
+            worst_overlap: 0.0,
+            escaped: 0,
+            kinetic: 0.0,
+            asleep: 0,
+        };
+        let rows = [
+            row("a", 100, 1.0),
+            row("b", 100, 1.0),
+            row("a", 1000, 10f64.powf(1.2)),
+            row("b", 1000, 100.0),
+        ];
+        let text = super::slopes(&rows);
+        assert_eq!(
+            text,
+            "- a: default: slope 1.20 (N = 100, 1000)\n- b: default: slope 2.00 (N = 100, 1000)\n"
+        );
     }
 }
