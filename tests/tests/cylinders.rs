@@ -1,7 +1,8 @@
-//! Cylinders (issue 45, point 2): exact against planes and balls, their
-//! prism (`Hull::cylinder`, 32 sides) against boxes, capsules, hulls and
-//! cylinders.
+//! Cylinders (issue 45, point 2): exact against planes and balls, and on
+//! a box's or hull's face; elsewhere against boxes, capsules, hulls and
+//! cylinders their prism (`Hull::cylinder`, 32 sides).
 
+use cosim_server::engine::{ImpulseKind, Party};
 use cosim_tests::*;
 use nalgebra::{UnitQuaternion, Vector3};
 
@@ -123,14 +124,9 @@ fn a_ball_meets_a_cylinders_true_surface() {
     assert!((closest - (r + rb)).abs() < 1e-6, "closest {closest}");
 }
 
-/// A cylinder standing on a box (its prism against the box) rests still,
-/// and one tipped over lies on its side on the floor: it ends with its
-/// axis level and its centre r above the floor (within the prism's 0.5 %
-/// only where it touches the box, not the floor).
-#[test]
-fn a_cylinder_stands_on_a_box_and_a_tipped_one_lies_on_the_floor() {
-    let (r, l) = (0.05, 0.1);
-    let table = cuboid(
+/// A box 0.6 x 0.6 x 0.2 on the floor, its top at z = 0.2: a table.
+fn table() -> String {
+    cuboid(
         "table",
         [0.3, 0.3, 0.1],
         10.0,
@@ -139,7 +135,17 @@ fn a_cylinder_stands_on_a_box_and_a_tipped_one_lies_on_the_floor() {
         [0.0; 3],
         [0.0; 3],
         0.5,
-    );
+    )
+}
+
+/// A cylinder standing on a box (its prism against the box) rests still,
+/// and one tipped over lies on its side on the floor: it ends with its
+/// axis level and its centre r above the floor (within the prism's 0.5 %
+/// only where it touches the box, not the floor).
+#[test]
+fn a_cylinder_stands_on_a_box_and_a_tipped_one_lies_on_the_floor() {
+    let (r, l) = (0.05, 0.1);
+    let table = table();
     let tipped = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 1.2);
     let q = [tipped.w, tipped.i, tipped.j, tipped.k];
     let s = sim(1e-3, 3000, [0.0, 0.0, -G])
@@ -157,4 +163,64 @@ fn a_cylinder_stands_on_a_box_and_a_tipped_one_lies_on_the_floor() {
     let axis = log.q * Vector3::z();
     assert!(axis.z.abs() < 1e-6, "the log's axis {axis}");
     assert!((log.x.z - r).abs() < 1e-6, "the log at {}", log.x.z);
+}
+
+/// Lying on a box (a table) it rests on its true side, not its prism's:
+/// the centre r above the table to the solver's tolerance, where the
+/// prism would settle on a flat r (1 - cos(pi / 32)) = 2.4e-4 m lower (or
+/// on an edge between). Turned about its own axis by a little, so that no
+/// flat of the prism is level. And standing on a convex hull's face (a
+/// slab given by its corners) it rests at l above it.
+#[test]
+fn a_cylinder_lies_on_a_box_and_stands_on_a_hull_at_its_true_size() {
+    let (r, l) = (0.05, 0.1);
+    let table = table();
+    // Axis along world y (a quarter turn about x), then 0.05 rad about it.
+    let lying = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), 0.05)
+        * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2);
+    let q = [lying.w, lying.i, lying.j, lying.k];
+    // A slab 0.6 x 0.6 x 0.1 as a hull of its corners (inertia given: a
+    // hull needs one).
+    let slab = "[[body]]\nname = \"slab\"\nmass = 10.0\ninertia = [0.3083, 0.3083, 0.6, 0.0, 0.0, 0.0]\n\
+        position = [1.0, 0.0, 0.05]\nfriction = 0.5\n[[body.shape]]\nhull = [[-0.3, -0.3, -0.05], \
+        [0.3, -0.3, -0.05], [0.3, 0.3, -0.05], [-0.3, 0.3, -0.05], [-0.3, -0.3, 0.05], [0.3, -0.3, 0.05], \
+        [0.3, 0.3, 0.05], [-0.3, 0.3, 0.05]]\n\n";
+    let s = sim(1e-3, 2000, [0.0, 0.0, -G])
+        + FLOOR
+        + &table
+        + &cylinder("log", (r, l), [0.0, 0.0, 0.2 + r], q, ([0.0; 3], [0.0; 3]))
+        + slab
+        + &cylinder(
+            "can",
+            (r, l),
+            [1.0, 0.0, 0.1 + l],
+            [1.0, 0.0, 0.0, 0.0],
+            ([0.0; 3], [0.0; 3]),
+        );
+    let mut e = engine(&s);
+    let mut most = [0usize; 2];
+    run(&mut e, 2000, |e, _| {
+        for (k, body) in [1usize, 3].into_iter().enumerate() {
+            let n = e
+                .impulses()
+                .iter()
+                .filter(|i| i.kind == ImpulseKind::Normal)
+                .filter(|i| i.a == Party::Body(body) || i.b == Party::Body(body))
+                .count();
+            most[k] = most[k].max(n);
+        }
+    });
+    let st = e.state();
+    let log = st.bodies[1];
+    let axis = log.q * Vector3::z();
+    assert!(axis.z.abs() < 1e-6, "the log's axis {axis}");
+    assert!((log.x.z - (0.2 + r)).abs() < 1e-6, "the log at {}", log.x.z);
+    assert!(log.v.norm() < 1e-6, "the log moves at {}", log.v);
+    let can = st.bodies[3];
+    assert!((can.x.z - (0.1 + l)).abs() < 1e-6, "the can at {}", can.x.z);
+    assert!(can.v.norm() < 1e-6, "the can moves at {}", can.v);
+    // Each on two points or more with an impulse: the log on its side's
+    // line (one point per end), the can on its rim (two opposite points
+    // already carry it; Lemke's answer may leave the others at zero).
+    assert!(most[0] >= 2 && most[1] >= 2, "contacts {most:?}");
 }

@@ -1,7 +1,11 @@
 //! A cylinder (about its shape's z axis, radius `r`, flat ends at `+-l`)
 //! against a plane and a ball, in closed form; against boxes, capsules,
 //! hulls and cylinders it is its prism (`model/hull.rs`,
-//! `Hull::cylinder`), as `hull.rs` takes any hull.
+//! `Hull::cylinder`), as `hull.rs` takes any hull, except where a box's
+//! or hull's face carries it ([`on_face`]): there its rim points on the
+//! face's plane, as on a plane, so that a can standing or lying on a
+//! table's box rests at its true height (the prism's flat sides lie
+//! `r (1 - cos(pi / 32))` inside the cylinder, 0.5 % of the radius).
 //!
 //! Against a plane, each end's rim offers four points a quarter turn
 //! apart, the first the rim's lowest (towards the plane: the part of the
@@ -11,23 +15,17 @@
 //! point each), tipped on a rim point. Features: end (0 at -l, 1 at +l)
 //! times 4 plus the point's place.
 
+use super::manifold::{face_contact, Reference};
 use super::segment::Pose;
 use super::Geometry;
+use crate::model::hull::Hull;
 use crate::model::{Counterpart, Plane};
 use nalgebra::Vector3;
 
-/// A cylinder (body A, at `pose`) against a fixed plane: the rim points
-/// (see the module) whose gap is at most `within`.
-pub fn cylinder_plane(
-    body: usize,
-    pose: &Pose,
-    (r, l): (f64, f64),
-    plane_index: usize,
-    plane: &Plane,
-    within: f64,
-    out: &mut Vec<Geometry>,
-) {
-    let n = plane.normal;
+/// The rim points a cylinder (`pose`, `(r, l)`) offers a plane of outward
+/// normal `n` (see the module): per end (0 at `-l`, 1 at `+l`), four
+/// points a quarter turn apart, the first the lowest along `n`.
+fn rim(pose: &Pose, (r, l): (f64, f64), n: &Vector3<f64>) -> [[Vector3<f64>; 4]; 2] {
     let u = pose.q.transform_vector(&Vector3::z());
     let across = n - u * n.dot(&u);
     // The rim's lowest direction; standing on an end (the normal along
@@ -38,10 +36,136 @@ pub fn cylinder_plane(
         pose.q.transform_vector(&Vector3::x())
     };
     let d2 = u.cross(&d1);
-    for (end, z) in [-l, l].into_iter().enumerate() {
+    [-l, l].map(|z| {
         let c = pose.x + u * z;
-        for (k, d) in [d1, d2, -d1, -d2].into_iter().enumerate() {
-            let p = c + d * r;
+        [d1, d2, -d1, -d2].map(|d| c + d * r)
+    })
+}
+
+/// The cosine within which a hull's face counts as carrying a cylinder
+/// whose prism's contact normal is near it: the prism's own angular
+/// resolution (its sides a 32nd of a turn apart).
+const FACE_COS: f64 = 0.995_184_726_672_196_9; // cos(pi / 32)
+
+/// How far inside the cylinder its prism's flat sides lie: a pair with a
+/// cylinder is tested as its prism within this much more, so that the
+/// true rim is found before the prism touches.
+pub fn prism_slack((r, _): (f64, f64)) -> f64 {
+    r * (1.0 - FACE_COS)
+}
+
+/// Where the prism of a cylinder met a hull (`hull::hull_hull` left its
+/// contacts in `out[start..]`) and the hull's face nearest the contact
+/// normal carries the cylinder: those contacts replaced by the cylinder's
+/// exact rim points (as [`cylinder_plane`]'s) on the face's plane, within
+/// the face's outline and `within`. Otherwise (an edge or a vertex of the
+/// hull, the cylinder's end or side as the reference, or no rim point over
+/// the face) the prism's contacts stand. `cylinder_is_a`: which side of
+/// the pair the cylinder is (the normal points from B towards A).
+#[allow(clippy::too_many_arguments)]
+pub fn on_face(
+    cylinder_is_a: bool,
+    cylinder: &Pose,
+    rl: (f64, f64),
+    other: &Pose,
+    hull: &Hull,
+    within: f64,
+    start: usize,
+    out: &mut Vec<Geometry>,
+) {
+    // The prism's contacts where they stand: within the caller's reach
+    // (the prism was tested `prism_slack` further).
+    let prism = |out: &mut Vec<Geometry>| {
+        let mut k = start;
+        while k < out.len() {
+            if out[k].gap > within {
+                out.remove(k);
+            } else {
+                k += 1;
+            }
+        }
+    };
+    let Some(first) = out.get(start) else {
+        return;
+    };
+    let (a, b) = (first.a, first.b);
+    // The hull's outward direction towards the cylinder.
+    let towards = if cylinder_is_a {
+        first.normal
+    } else {
+        -first.normal
+    };
+    let Some((f, n)) = (0..hull.faces.len())
+        .map(|f| (f, other.q.transform_vector(&hull.faces[f].normal)))
+        .max_by(|x, y| x.1.dot(&towards).total_cmp(&y.1.dot(&towards)))
+    else {
+        return prism(out);
+    };
+    if n.dot(&towards) < FACE_COS {
+        return prism(out);
+    }
+    let face = &hull.faces[f];
+    let offset = n.dot(&other.point(&hull.vertices[face.verts[0]]));
+    // Inside the face's outline: on the inner side of every edge (the loop
+    // is counter-clockwise seen from outside), to a round-off's slack.
+    let slack = 1e-9 * hull.bound.max(1e-9);
+    let over_face = |p: &Vector3<f64>| {
+        let m = face.verts.len();
+        (0..m).all(|k| {
+            let v0 = other.point(&hull.vertices[face.verts[k]]);
+            let v1 = other.point(&hull.vertices[face.verts[(k + 1) % m]]);
+            let side = (v1 - v0).cross(&n);
+            let len = side.norm();
+            len == 0.0 || (p - v0).dot(&side) / len <= slack
+        })
+    };
+    let points = rim(cylinder, rl, &n);
+    let mut kept = [(0usize, Vector3::zeros(), 0.0); 8];
+    let mut count = 0;
+    for (end, ring) in points.iter().enumerate() {
+        for (k, p) in ring.iter().enumerate() {
+            let gap = n.dot(p) - offset;
+            let foot = p - n * gap;
+            if gap <= within && over_face(&foot) {
+                kept[count] = (4 * end + k, *p, gap);
+                count += 1;
+            }
+        }
+    }
+    let (Counterpart::Body(b), true) = (b, count > 0) else {
+        return prism(out);
+    };
+    out.truncate(start);
+    // The hull's face is the reference: its outward normal towards the
+    // cylinder, from B towards A when the hull is B.
+    let reference = Reference {
+        is_a: !cylinder_is_a,
+        normal: n,
+        on: other.point(&hull.vertices[face.verts[0]]),
+    };
+    let (pa, pb) = match cylinder_is_a {
+        true => (cylinder, other),
+        false => (other, cylinder),
+    };
+    for &(feature, p, gap) in &kept[..count] {
+        out.push(face_contact((a, pa), (b, pb), &reference, p, gap, feature));
+    }
+}
+
+/// A cylinder (body A, at `pose`) against a fixed plane: the rim points
+/// (see the module) whose gap is at most `within`.
+pub fn cylinder_plane(
+    body: usize,
+    pose: &Pose,
+    rl: (f64, f64),
+    plane_index: usize,
+    plane: &Plane,
+    within: f64,
+    out: &mut Vec<Geometry>,
+) {
+    let n = plane.normal;
+    for (end, ring) in rim(pose, rl, &n).iter().enumerate() {
+        for (k, &p) in ring.iter().enumerate() {
             let gap = n.dot(&p) - plane.offset;
             if gap <= within {
                 out.push(Geometry {

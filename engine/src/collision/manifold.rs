@@ -35,22 +35,36 @@ pub fn push_face_contacts<const N: usize>(
         if gap > within {
             continue;
         }
-        let on_ref = p - n_ref * gap;
-        let (on_a, on_b, normal) = if r.is_a {
-            (on_ref, p, -n_ref)
-        } else {
-            (p, on_ref, n_ref)
-        };
-        out.push(Geometry {
-            a,
-            b: Counterpart::Body(b),
-            feature,
-            gap,
-            normal,
-            point: p - n_ref * (0.5 * gap),
-            r_a: on_a - pa.x,
-            r_b: on_b - pb.x,
-        });
+        out.push(face_contact((a, pa), (b, pb), r, p, gap, feature));
+    }
+}
+
+/// The contact of point `p` of the incident side, `gap` above reference
+/// face `r` (its foot on the face the reference side's point).
+pub fn face_contact(
+    (a, pa): (usize, &Pose),
+    (b, pb): (usize, &Pose),
+    r: &Reference,
+    p: Vector3<f64>,
+    gap: f64,
+    feature: usize,
+) -> Geometry {
+    let n_ref = r.normal;
+    let on_ref = p - n_ref * gap;
+    let (on_a, on_b, normal) = if r.is_a {
+        (on_ref, p, -n_ref)
+    } else {
+        (p, on_ref, n_ref)
+    };
+    Geometry {
+        a,
+        b: Counterpart::Body(b),
+        feature,
+        gap,
+        normal,
+        point: p - n_ref * (0.5 * gap),
+        r_a: on_a - pa.x,
+        r_b: on_b - pb.x,
     }
 }
 

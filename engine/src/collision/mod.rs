@@ -368,14 +368,49 @@ fn shape_pair(
             within,
             out,
         ),
-        (Box { .. }, Hull { index, .. }) => {
+        (
+            Box { .. },
+            Hull {
+                index, cylinder, ..
+            },
+        ) => {
             // A box in a scene with hulls has its hull (`Geom::hull`).
             if let Some(h) = ga.hull {
-                hull::hull_hull(a, &pa, &hulls[h], b, &pb, &hulls[index], within, out)
+                let wider = within + cylinder.map_or(0.0, cylinder::prism_slack);
+                hull::hull_hull(a, &pa, &hulls[h], b, &pb, &hulls[index], wider, out);
+                if let Some(rl) = cylinder {
+                    cylinder::on_face(false, &pb, rl, &pa, &hulls[h], within, start, out);
+                }
             }
         }
-        (Hull { index: ia, .. }, Hull { index: ib, .. }) => {
-            hull::hull_hull(a, &pa, &hulls[ia], b, &pb, &hulls[ib], within, out)
+        (
+            Hull {
+                index: ia,
+                cylinder: ca,
+                ..
+            },
+            Hull {
+                index: ib,
+                cylinder: cb,
+                ..
+            },
+        ) => {
+            let slack = match (ca, cb) {
+                (Some(rl), None) | (None, Some(rl)) => cylinder::prism_slack(rl),
+                _ => 0.0,
+            };
+            hull::hull_hull(a, &pa, &hulls[ia], b, &pb, &hulls[ib], within + slack, out);
+            // A cylinder carried by a hull's face rests on its true rim;
+            // two cylinders stay prisms.
+            match (ca, cb) {
+                (Some(rl), None) => {
+                    cylinder::on_face(true, &pa, rl, &pb, &hulls[ib], within, start, out)
+                }
+                (None, Some(rl)) => {
+                    cylinder::on_face(false, &pb, rl, &pa, &hulls[ia], within, start, out)
+                }
+                _ => {}
+            }
         }
         // Ordered by rank above.
         (Capsule { .. } | Box { .. } | Hull { .. }, Sphere { .. })

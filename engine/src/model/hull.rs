@@ -6,8 +6,9 @@
 use nalgebra::Vector3;
 
 /// The sides of the prism a cylinder is against boxes, capsules, hulls
-/// and cylinders: its flat sides lie within r (1 - cos(pi / 32)), 0.5 %
-/// of its radius, of the round one.
+/// and cylinders (but on a box's or hull's face: `collision::cylinder`):
+/// its flat sides lie within r (1 - cos(pi / 32)), 0.5 % of its radius,
+/// of the round one.
 pub const CYLINDER_SIDES: usize = 32;
 
 #[derive(Debug, Clone, PartialEq)]

@@ -38,7 +38,8 @@ pub enum Shape {
     /// vertex's distance from the shape's origin. A cylinder (`cylinder`:
     /// its radius and half length, about z) is the hull of a prism of
     /// [`hull::CYLINDER_SIDES`] sides against boxes, capsules, hulls and
-    /// cylinders, and itself, exactly, against planes and spheres.
+    /// cylinders, and itself, exactly, against planes, spheres and a box's
+    /// or hull's face that carries it.
     Hull {
         index: usize,
         bound: f64,
