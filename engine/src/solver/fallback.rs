@@ -110,6 +110,10 @@ pub struct Step<'a> {
     pub awake: &'a [u32],
     /// The rows by island: each is solved on its own.
     pub groups: &'a Groups,
+    /// `auto`: where the rigid problem fails, give its error back at once
+    /// (the step goes to PGS) instead of climbing to the relaxed and
+    /// compliant rungs.
+    pub escape: bool,
 }
 
 /// What the ladder gave.
@@ -187,7 +191,9 @@ pub fn solve(
     } = step;
     let split = &mut scratch.split;
     split.index(m, step.groups);
+    lemke.first_rung_only = step.escape;
     let rigid = split.lemke(lemke, m, guess);
+    lemke.first_rung_only = false;
     let mut energy_refused = false;
     if !p.fallback {
         // Rigid only: the answer as it is, or the failure.
@@ -252,6 +258,10 @@ pub fn solve(
         }
         Err(e) => e,
     };
+    if step.escape {
+        m.rhs(nu_free, contacts, p, Offsets::Full);
+        return Err(rigid);
+    }
     m.rhs(nu_free, contacts, p, Offsets::Relaxed);
     if let Ok(info) = scratch.split.lemke(lemke, m, None) {
         m.recover(nu_free, nu);

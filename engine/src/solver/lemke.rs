@@ -174,6 +174,9 @@ pub struct Lemke {
     ties: Vec<usize>,
     /// A lower pivot cap than [`pivot_limit`] (`Params::lemke_max_pivots`).
     pub max_pivots: Option<usize>,
+    /// Only the ladder's first rung (`auto`, where a failure goes to PGS
+    /// instead: `fallback::Step::escape`).
+    pub first_rung_only: bool,
     /// Scratch of [`Lemke::solve_support`]: the support, `M_SS` and its LU
     /// factors with their row order, the solution and the refinement's
     /// residual.
@@ -232,6 +235,7 @@ impl Lemke {
                         ..info
                     })
                 }
+                Err(e) if self.first_rung_only => return Err(e),
                 Err(e) => {
                     first.get_or_insert(e);
                 }

@@ -11,7 +11,7 @@ use crate::solver::island;
 use crate::solver::mlcp::{Assembly, Offsets};
 use crate::solver::pgs::Stop;
 use crate::solver::{
-    fallback, iterative, matrix_free, prune, LemkeError, PgsParams, AUTO_PGS_SIZE,
+    fallback, iterative, matrix_free, prune, LemkeError, PgsParams, AUTO_ESCAPE_SIZE, AUTO_PGS_SIZE,
 };
 use cosim_shared::SolverChoice;
 
@@ -81,6 +81,7 @@ impl Engine {
                     minv: &ws.minv,
                     awake: ws.awake.bodies(),
                     groups: &ws.groups,
+                    escape: p.solver == SolverChoice::Auto && m.lcp_size() > AUTO_ESCAPE_SIZE,
                 };
                 let n = m.lcp_size();
                 m.z.clear();
