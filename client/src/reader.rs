@@ -189,18 +189,13 @@ impl StateReader {
                     name: self.name.clone(),
                 });
             }
-            // A hybrid spin that ran out or was off its core has failed:
+            // A spin that ran out (or, hybrid, was off its core) ends:
             // the rest of the wait blocks (`SpinRule`).
-            if spinning && mode == WaitMode::Hybrid {
-                if elapsed >= spin_for {
-                    rule.failed();
-                }
-                if elapsed >= spin_for || rule.preempted(last, now) {
-                    spinning = false;
-                    self.spin.set(rule);
-                }
-            } else if spinning && elapsed >= spin_for {
+            if spinning
+                && !rule.keep_spinning(mode == WaitMode::Hybrid, last, now, start + spin_for)
+            {
                 spinning = false;
+                self.spin.set(rule);
             }
             if spinning {
                 last = now;

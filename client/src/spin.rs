@@ -94,6 +94,26 @@ impl SpinRule {
         true
     }
 
+    /// Whether a wait spinning since its last poll at `last` spins on at
+    /// `now`, its spin budgeted to end at `until`. `adaptive` (the hybrid
+    /// wait): a spin that ran out or was preempted fails (`failed`), and
+    /// the rest of the wait blocks; otherwise it spins until `until`.
+    pub fn keep_spinning(
+        &mut self,
+        adaptive: bool,
+        last: Instant,
+        now: Instant,
+        until: Instant,
+    ) -> bool {
+        if now >= until {
+            if adaptive {
+                self.failed();
+            }
+            return false;
+        }
+        !(adaptive && self.preempted(last, now))
+    }
+
     /// A spin ended without its answer (run out or preempted): the next
     /// waits block for a cool-down, twice the last one.
     pub fn failed(&mut self) {
@@ -154,6 +174,26 @@ mod tests {
         }
         r.failed();
         assert_eq!(blocked(&mut r), 1);
+    }
+
+    #[test]
+    fn a_spin_ends_at_its_budget_and_fails_only_when_adaptive() {
+        let t = Instant::now();
+        let (poll, end) = (t + Duration::from_micros(1), t + MIN_SPIN);
+        let mut r = SpinRule::default();
+        // Within its budget and polled without a gap: it spins on.
+        assert!(r.keep_spinning(true, t, poll, end));
+        // Run out: a plain spin just stops; an adaptive one fails.
+        assert!(!r.keep_spinning(false, t, end, end));
+        assert_eq!(r.budget(), MIN_SPIN);
+        assert!(!r.keep_spinning(true, t, end, end));
+        assert_eq!(r.budget(), Duration::ZERO);
+        // Preempted within its budget: adaptive only.
+        let far = t + 4 * PREEMPTED;
+        let gap = t + PREEMPTED;
+        assert!(r.keep_spinning(false, t, gap, far));
+        assert!(!r.keep_spinning(true, t, gap, far));
+        assert_eq!(r.preemptions(), 1);
     }
 
     #[test]

@@ -105,7 +105,8 @@ pub fn on_face(
         return prism(out);
     }
     let face = &hull.faces[f];
-    let offset = n.dot(&other.point(&hull.vertices[face.verts[0]]));
+    let on = other.point(&hull.vertices[face.verts[0]]);
+    let offset = n.dot(&on);
     // Inside the face's outline: on the inner side of every edge (the loop
     // is counter-clockwise seen from outside), to a round-off's slack.
     let slack = 1e-9 * hull.bound.max(1e-9);
@@ -141,7 +142,7 @@ pub fn on_face(
     let reference = Reference {
         is_a: !cylinder_is_a,
         normal: n,
-        on: other.point(&hull.vertices[face.verts[0]]),
+        on,
     };
     let (pa, pb) = match cylinder_is_a {
         true => (cylinder, other),

@@ -259,7 +259,11 @@ pub fn solve(
         Err(e) => e,
     };
     if step.escape {
-        m.rhs(nu_free, contacts, p, Offsets::Full);
+        // The caller goes on with PGS on the rigid problem: only the
+        // energy check's relaxed solve changed the right-hand side.
+        if energy_refused {
+            m.rhs(nu_free, contacts, p, Offsets::Full);
+        }
         return Err(rigid);
     }
     m.rhs(nu_free, contacts, p, Offsets::Relaxed);

@@ -75,16 +75,10 @@ impl Server {
                     continue;
                 }
             }
-            // A hybrid spin that ran out or was off its core has failed:
+            // A spin that ran out (or, hybrid, was off its core) ends:
             // the rest of the wait blocks (`cosim_client::SpinRule`).
-            if spinning && self.opts.wait == WaitMode::Hybrid {
-                if now >= spin_until {
-                    self.spin.failed();
-                    spinning = false;
-                } else if self.spin.preempted(last, now) {
-                    spinning = false;
-                }
-            } else if spinning && now >= spin_until {
+            let adaptive = self.opts.wait == WaitMode::Hybrid;
+            if spinning && !self.spin.keep_spinning(adaptive, last, now, spin_until) {
                 spinning = false;
             }
             if spinning {
