@@ -248,3 +248,26 @@ pub fn corpus_run(model: cosim_server::engine::Model, steps: u64) -> CorpusRun {
     }
     r
 }
+
+/// Asserts `robust::check`'s bounds on a run: no failed step, no step's
+/// kinetic energy over its free motion's plus its declared allowance, the
+/// midpoint energy within the start's plus the inputs' work, no body
+/// faster than that allows (`what` names the run in a failure).
+pub fn assert_within_bounds(c: &cosim_bench::robust::Check, what: &str) {
+    assert_eq!(c.failures, 0, "{what}: {:?}", c.first_failure);
+    assert!(
+        c.kinetic <= 0.0,
+        "{what}: a step gained {} J over its bound",
+        c.kinetic
+    );
+    assert!(
+        c.energy <= 0.0,
+        "{what}: midpoint energy {} J over its bound",
+        c.energy
+    );
+    assert!(
+        c.speed <= 0.0,
+        "{what}: a body {} m/s faster than its bound",
+        c.speed
+    );
+}

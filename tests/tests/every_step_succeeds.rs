@@ -117,30 +117,21 @@ fn the_reference_scene_runs_a_million_steps_with_lemke_alone() {
 /// joint_torques for 30 s (it stopped at step 2069 on a ray): no failure,
 /// and its energy bounded by what the shoulder torque's work explains
 /// (`robust::check`'s kinetic, midpoint-energy and speed bounds, which
-/// count the torque's work on the free motion).
+/// count the torque's work on the free motion). With PGS too (issue 48:
+/// the first rigid step after a relaxed stretch gained 0.118 J at step
+/// 28,343, and a converged relaxed answer 9.8e-3 J at step 7712).
 #[test]
 fn joint_torques_runs_30_s_within_the_shoulder_torques_work() {
     let text = shipped_scene("joint_torques.toml");
-    let c = robust::check(&text, 30_000, SolverChoice::Lemke).unwrap_or_else(|e| panic!("{e}"));
-    eprintln!("joint_torques 30 s: {c:?}");
-    assert_eq!((c.steps, c.failures), (30_000, 0), "{:?}", c.first_failure);
-    assert!(
-        c.kinetic <= 0.0,
-        "a step gained {} J over its bound",
-        c.kinetic
-    );
-    assert!(
-        c.energy <= 0.0,
-        "midpoint energy {} J over its bound",
-        c.energy
-    );
-    assert!(
-        c.speed <= 0.0,
-        "a body {} m/s faster than its bound",
-        c.speed
-    );
-    // The steps where the chain locks against a plane fell back, and say so.
-    assert!(c.ladder.fell_back() > 0);
+    for solver in [SolverChoice::Lemke, SolverChoice::Pgs] {
+        let c = robust::check(&text, 30_000, solver).unwrap_or_else(|e| panic!("{e}"));
+        eprintln!("joint_torques 30 s, {}: {c:?}", solver.as_str());
+        assert_eq!(c.steps, 30_000);
+        cosim_tests::assert_within_bounds(&c, solver.as_str());
+        // The steps where the chain locks against a plane fell back, and
+        // say so.
+        assert!(c.ladder.fell_back() > 0);
+    }
 }
 
 /// 500 seeded random scenes of 20 steps (`bench robust` runs more): no

@@ -6,9 +6,10 @@
 //!
 //! - Such a contact is taken out of the LCP (`mlcp::HELD`): no impulse,
 //!   no separation asked, and the step neither fails nor gains energy.
-//! - The projection out of deep penetration leaves bodies on joints where
-//!   they are (`project.rs`): it knows nothing of joints, and moving one
-//!   opened its joint by millimetres.
+//! - The projection out of deep penetration moves bodies on joints only
+//!   with their joints held, and leaves a contact the joints hold to the
+//!   velocity stabilisation (`project.rs`): moving it opened the joint by
+//!   millimetres, later centimetres.
 
 use cosim_server::engine::measure::energy;
 use cosim_server::engine::ImpulseKind;
@@ -71,9 +72,10 @@ fn a_contact_the_joints_hold_carries_nothing_and_no_step_fails() {
     }
 }
 
-/// A sphere on a joint built 3 mm into the floor stays where its joint
-/// holds it (the velocity stabilisation lifts it, not the projection);
-/// a free sphere 3 mm into it is still projected out.
+/// A sphere hanging on a joint built 3 mm into the floor stays where its
+/// joint holds it (the joint holds the contact: the velocity
+/// stabilisation lifts it, not the projection); a free sphere 3 mm into
+/// it is still projected out.
 #[test]
 fn the_projection_moves_no_body_on_a_joint() {
     let mut s = sim(1e-3, 10, [0.0, 0.0, -G]);

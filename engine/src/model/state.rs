@@ -39,6 +39,12 @@ pub struct State {
     /// the tag of its sleeping island (`sleep::AWAKE` when awake).
     pub rest: Vec<u32>,
     pub sleep_tag: Vec<u32>,
+    /// Per body: the last step solved its island by a fallback, whose
+    /// relaxed problem has no joint drift term, so its joints are held
+    /// together at position level before the next step
+    /// (`integrate::project`). Part of the state so that a restore repeats
+    /// the next step's bits.
+    pub drifted: Vec<bool>,
 }
 
 /// One contact's impulses of the last step, by its identity
@@ -112,6 +118,7 @@ impl State {
             + self.warm_lcp.capacity() * size_of::<(usize, bool)>()
             + self.warm_active.capacity() * size_of::<bool>()
             + (self.rest.capacity() + self.sleep_tag.capacity()) * size_of::<u32>()
+            + self.drifted.capacity() * size_of::<bool>()
     }
 
     /// The last step's impulses of contact `id`, if it was in the LCP.
@@ -139,6 +146,7 @@ impl State {
             warm_active: Vec::new(),
             rest: vec![0; model.bodies.len()],
             sleep_tag: vec![AWAKE; model.bodies.len()],
+            drifted: vec![false; model.bodies.len()],
         }
     }
 }

@@ -16,13 +16,18 @@
 //!
 //! A rigid answer is also refused, and the step relaxed, when it gives more
 //! kinetic energy than the free motion plus what the stabilisation may give
-//! ([`allowance`], [`explained`]): the
+//! ([`allowances`], [`explained`]): the
 //! solvable neighbours of an unsolvable LCP have huge impulses, and their
 //! answers inject energy through the offsets (see there).
 //!
 //! Each rung's answer is verified against the problem it claims to solve.
 //! The step report carries the rung, so a run counts how often each was
 //! needed.
+//!
+//! The ladder is climbed island by island (issue 48): an island's energy
+//! check weighs its own rows, and only the islands that need a fallback
+//! take it, so a far-away pendulum keeps its rigid answer, to the bit,
+//! while another island is relaxed.
 
 use crate::constraint::applied::InvMass;
 use crate::constraint::contact::Contact;
@@ -89,12 +94,27 @@ pub struct Scratch {
     /// The rigid answer and its offsets while the relaxed one is formed.
     z: Vec<f64>,
     offset: Vec<f64>,
+    /// Per island: the rigid answer's gain, the stabilisation budget and
+    /// the allowance, the relaxed answer's gain, the offsets' work at its impulses, where it
+    /// ended, and a mask of islands to solve.
+    gain: Vec<f64>,
+    budget: Vec<f64>,
+    allow: Vec<f64>,
+    relaxed_gain: Vec<f64>,
+    work: Vec<f64>,
+    rung: Vec<Rung>,
+    mask: Vec<bool>,
 }
 
 impl Scratch {
     /// Islands of the last solve with LCP unknowns (each solved alone).
     pub fn islands(&self) -> usize {
         self.split.islands()
+    }
+
+    /// Whether island `g` of the last solve fell back.
+    pub fn fell(&self, g: usize) -> bool {
+        matches!(self.rung.get(g), Some(Rung::Fell(_)))
     }
 }
 
@@ -130,13 +150,33 @@ pub struct Solved {
     pub allowance: f64,
 }
 
-/// The rigid answer's energy check, first part: the kinetic energy an
-/// answer that gains `gain` over the free motion may gain. Gains at
-/// round-off pass outright (most steps lose energy to their constraints,
-/// and then the budget, a coupling per row, need not be formed); others
-/// may gain [`BUDGET_FACTOR`] times the stabilisation budget (a resting or
-/// sliding contact, a bounce).
-pub fn allowance(m: &Mlcp, gain: f64, step: Step) -> f64 {
+/// The rigid answer's energy check, first part, island by island: the
+/// kinetic energy an island's answer that gains `gain[g]` over the free
+/// motion may gain, into `allow`. Gains at round-off pass outright (most
+/// steps lose energy to their constraints, and then the budget, a
+/// coupling per row, need not be formed); others may gain
+/// [`BUDGET_FACTOR`] times the island's stabilisation budget (a resting
+/// or sliding contact, a bounce), formed into `budget` when needed.
+pub fn allowances(m: &Mlcp, gain: &[f64], step: Step, budget: &mut Vec<f64>, allow: &mut Vec<f64>) {
+    let round_off = round_off(step);
+    let mut formed = false;
+    allow.clear();
+    for &gain in gain {
+        allow.push(if gain <= round_off {
+            round_off
+        } else {
+            if !formed {
+                m.stabilisation_budget_by_island(step.params, step.minv, step.groups, budget);
+                formed = true;
+            }
+            BUDGET_FACTOR * budget[allow.len()] + round_off
+        });
+    }
+}
+
+/// The gains that are round-off of the energy sum (J): an absolute floor
+/// and a share of the free motion's kinetic energy.
+pub fn round_off(step: Step) -> f64 {
     // Over the awake bodies' entries, in body order: the sleeping ones
     // add exact zeros, so the sum has the bits of the sum over all.
     let free: f64 = 0.5
@@ -144,16 +184,11 @@ pub fn allowance(m: &Mlcp, gain: f64, step: Step) -> f64 {
             .flat_map(|&i| &step.nu_free[6 * i as usize..6 * i as usize + 6])
             .map(|v| v * v)
             .sum::<f64>();
-    let round_off = ENERGY_ABSOLUTE + ENERGY_RELATIVE * free;
-    if gain <= round_off {
-        round_off
-    } else {
-        BUDGET_FACTOR * m.stabilisation_budget(step.params, step.minv) + round_off
-    }
+    ENERGY_ABSOLUTE + ENERGY_RELATIVE * free
 }
 
 /// The energy check, second part, for an answer that gained more than its
-/// [`allowance`]: held against the relaxed answer of the same step, it may
+/// [`allowances`]: held against the relaxed answer of the same step, it may
 /// gain what the relaxed answer gains (if anything; a relaxed answer that
 /// dissipates does not pull the bound below the offsets' work: S4 at
 /// h = 1e-2, step 112, had a healthy rigid gain of 1.1e-5 J against a
@@ -167,14 +202,29 @@ pub fn explained(relaxed_gain: f64, work: f64, allowance: f64) -> f64 {
     relaxed_gain.max(0.0) + BUDGET_FACTOR * work + allowance
 }
 
+/// Where an island's answer ended on the ladder.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Rung {
+    /// The rigid answer, within its allowance (J).
+    Rigid(f64),
+    /// A rigid answer that gained more than its allowance.
+    Suspect,
+    /// Solved by a fallback formulation.
+    Fell(Fallback),
+    /// No rung has solved it (yet).
+    Unsolved,
+}
+
 /// Solves the step's LCP (right-hand side already formed with
 /// [`Offsets::Full`]) island by island (`split.rs`) into `m.z`, the rigid
 /// problem first from `guess` (the last step's support by contact
 /// identity, where there is one), and recovers `nu'` into `nu`, climbing
-/// the ladder of the module notes. The energy check and the ladder are
-/// the whole step's. On a fallback, `m`'s right-hand side is left as the
+/// the ladder of the module notes island by island: the energy check is
+/// each island's, and an island that falls back does so alone (its rows'
+/// offsets relaxed by [`Offsets::Islands`]), so another island's answer
+/// keeps its bits. On a fallback, `m`'s right-hand side is left as the
 /// answer's. The error is the rigid problem's, returned only when every
-/// rung failed; then `m` holds the rigid problem again.
+/// rung failed on some island; then `m` holds the rigid problem again.
 pub fn solve(
     lemke: &mut Lemke,
     m: &mut Mlcp,
@@ -187,14 +237,14 @@ pub fn solve(
         nu_free,
         contacts,
         params: p,
+        groups,
         ..
     } = step;
     let split = &mut scratch.split;
-    split.index(m, step.groups);
+    split.index(m, groups);
     lemke.first_rung_only = step.escape;
-    let rigid = split.lemke(lemke, m, guess);
+    let rigid = split.lemke(lemke, m, guess, None);
     lemke.first_rung_only = false;
-    let mut energy_refused = false;
     if !p.fallback {
         // Rigid only: the answer as it is, or the failure.
         let info = rigid?;
@@ -202,80 +252,144 @@ pub fn solve(
         return Ok(Solved {
             info,
             fallback: None,
-            energy_refused,
+            energy_refused: false,
             allowance: f64::INFINITY,
         });
     }
-    let rigid = match rigid {
-        Ok(info) => {
-            m.recover(nu_free, nu);
-            let gain = m.kinetic_change(nu_free, nu);
-            let allowance = allowance(m, gain, step);
-            if gain <= allowance {
-                return Ok(Solved {
-                    info,
-                    fallback: None,
-                    energy_refused,
-                    allowance,
-                });
-            }
-            // Held against the relaxed answer: the rigid one is kept aside.
-            scratch.z.clear();
-            scratch.z.extend_from_slice(&m.z);
-            scratch.offset.clear();
-            scratch.offset.extend_from_slice(&m.offset);
-            m.rhs(nu_free, contacts, p, Offsets::Relaxed);
-            if let Ok(relaxed) = scratch.split.lemke(lemke, m, None) {
-                m.recover(nu_free, nu);
-                let relaxed_gain = m.kinetic_change(nu_free, nu);
-                let bound = explained(relaxed_gain, m.offset_work(&scratch.offset), allowance);
-                if gain <= bound {
-                    // The rigid answer stands: the same operations on the
-                    // same data as before give the same bits.
-                    m.rhs(nu_free, contacts, p, Offsets::Full);
-                    m.z.clear();
-                    m.z.extend_from_slice(&scratch.z);
-                    m.recover(nu_free, nu);
-                    return Ok(Solved {
-                        info,
-                        fallback: None,
-                        energy_refused,
-                        allowance: bound,
-                    });
-                }
-                return Ok(Solved {
-                    info: relaxed,
-                    fallback: Some(Fallback::Relaxed),
-                    energy_refused: true,
-                    allowance: m.motor_work(),
-                });
-            }
-            energy_refused = true;
-            LemkeError::NumericalBreakdown {
-                pivots: info.work,
-                residual: info.residual,
-            }
-        }
-        Err(e) => e,
+    let first_error = match rigid {
+        Err(e) if step.escape => return Err(e),
+        Err(e) => Some(e),
+        Ok(_) => None,
     };
-    if step.escape {
-        // The caller goes on with PGS on the rigid problem: only the
-        // energy check's relaxed solve changed the right-hand side.
-        if energy_refused {
-            m.rhs(nu_free, contacts, p, Offsets::Full);
-        }
-        return Err(rigid);
-    }
-    m.rhs(nu_free, contacts, p, Offsets::Relaxed);
-    if let Ok(info) = scratch.split.lemke(lemke, m, None) {
-        m.recover(nu_free, nu);
-        return Ok(Solved {
-            info,
-            fallback: Some(Fallback::Relaxed),
-            energy_refused,
-            allowance: m.motor_work(),
+    let mut info = split.solved();
+    m.recover(nu_free, nu);
+    // Each island's rigid answer against its allowance.
+    let islands = groups.len();
+    m.kinetic_change_by_island(groups, nu_free, nu, &mut scratch.gain);
+    allowances(
+        m,
+        &scratch.gain,
+        step,
+        &mut scratch.budget,
+        &mut scratch.allow,
+    );
+    scratch.rung.clear();
+    for g in 0..islands {
+        scratch.rung.push(if split.failed()[g] {
+            Rung::Unsolved
+        } else if scratch.gain[g] <= scratch.allow[g] {
+            Rung::Rigid(scratch.allow[g])
+        } else {
+            Rung::Suspect
         });
     }
+    if scratch.rung.iter().all(|r| matches!(r, Rung::Rigid(_))) {
+        return Ok(Solved {
+            info,
+            fallback: None,
+            energy_refused: false,
+            allowance: total_allowance(&scratch.rung, 0.0),
+        });
+    }
+    // The relaxed problem on the other islands; the rigid answer and its
+    // offsets kept aside.
+    scratch.z.clear();
+    scratch.z.extend_from_slice(&m.z);
+    scratch.offset.clear();
+    scratch.offset.extend_from_slice(&m.offset);
+    scratch.mask.clear();
+    scratch
+        .mask
+        .extend(scratch.rung.iter().map(|r| !matches!(r, Rung::Rigid(_))));
+    m.relax_islands(groups, &scratch.mask);
+    m.rhs(nu_free, contacts, p, Offsets::Islands);
+    let split = &mut scratch.split;
+    let _ = split.lemke(lemke, m, None, Some(&scratch.mask));
+    add_work(&mut info, split.solved());
+    m.recover(nu_free, nu);
+    m.kinetic_change_by_island(groups, nu_free, nu, &mut scratch.relaxed_gain);
+    m.offset_work_by_island(&scratch.offset, groups, &mut scratch.work);
+    let mut energy_refused = false;
+    for g in 0..islands {
+        let rung = scratch.rung[g];
+        if matches!(rung, Rung::Rigid(_)) {
+            continue;
+        }
+        let suspect = rung == Rung::Suspect;
+        let rung = if split.failed()[g] {
+            Rung::Unsolved
+        } else if suspect {
+            // As one problem: the rigid answer stands where the relaxed
+            // impulses explain its gain.
+            let bound = explained(scratch.relaxed_gain[g], scratch.work[g], scratch.allow[g]);
+            match scratch.gain[g] <= bound {
+                true => Rung::Rigid(bound),
+                false => Rung::Fell(Fallback::Relaxed),
+            }
+        } else {
+            Rung::Fell(Fallback::Relaxed)
+        };
+        // A rigid answer refused for its energy (not one that stood).
+        energy_refused |= suspect && !matches!(rung, Rung::Rigid(_));
+        scratch.rung[g] = rung;
+    }
+    let unsolved = |r: &[Rung]| r.contains(&Rung::Unsolved);
+    if step.escape && unsolved(&scratch.rung) {
+        // The caller goes on with PGS on the rigid problem.
+        m.rhs(nu_free, contacts, p, Offsets::Full);
+        return Err(first_error.unwrap_or(LemkeError::NumericalBreakdown {
+            pivots: info.work,
+            residual: info.residual,
+        }));
+    }
+    if unsolved(&scratch.rung) {
+        compliant(lemke, m, &mut info, scratch);
+    }
+    if unsolved(&scratch.rung) {
+        // The caller may go on with another solver: give it the rigid
+        // problem.
+        m.rhs(nu_free, contacts, p, Offsets::Full);
+        return Err(first_error.unwrap_or(LemkeError::NumericalBreakdown {
+            pivots: info.work,
+            residual: info.residual,
+        }));
+    }
+    // The answer: each island's rung, on the right-hand side that has the
+    // fallen islands' rows relaxed; a rigid island's unknowns as its rigid
+    // solve left them.
+    let mut fallback = None;
+    scratch.mask.clear();
+    for (g, &rung) in scratch.rung.iter().enumerate() {
+        match rung {
+            Rung::Fell(f) => fallback = Fallback::max(fallback, Some(f)),
+            _ => {
+                for &a in scratch.split.unknowns_of(g) {
+                    m.z[a as usize] = scratch.z[a as usize];
+                }
+            }
+        }
+        scratch.mask.push(matches!(rung, Rung::Fell(_)));
+    }
+    m.relax_islands(groups, &scratch.mask);
+    m.rhs(nu_free, contacts, p, Offsets::Islands);
+    m.recover(nu_free, nu);
+    let motors = if fallback.is_some() {
+        m.motor_work()
+    } else {
+        0.0
+    };
+    Ok(Solved {
+        info,
+        fallback,
+        energy_refused,
+        allowance: total_allowance(&scratch.rung, motors),
+    })
+}
+
+/// The compliant rung on the islands still [`Rung::Unsolved`]: each gets
+/// the least compliance of [`COMPLIANCE`] for which Lemke's answer
+/// verifies, on the relaxed right-hand side already formed.
+fn compliant(lemke: &mut Lemke, m: &mut Mlcp, info: &mut SolveInfo, scratch: &mut Scratch) {
     let n = m.lcp_size();
     // NOTE: not below the contact rows' own scale before the joints are
     // eliminated: where the joints hold every contact (a contact between
@@ -290,24 +404,47 @@ pub fn solve(
     scratch.diagonal.extend((0..n).map(|i| m.lcp_m[i * n + i]));
     for rel in COMPLIANCE {
         let eps = rel * scale;
+        scratch.mask.clear();
+        scratch
+            .mask
+            .extend(scratch.rung.iter().map(|&r| r == Rung::Unsolved));
+        if !scratch.mask.contains(&true) {
+            break;
+        }
         for i in 0..n {
             m.lcp_m[i * n + i] = scratch.diagonal[i] + eps;
         }
-        let solved = scratch.split.lemke(lemke, m, None);
+        let split = &mut scratch.split;
+        let _ = split.lemke(lemke, m, None, Some(&scratch.mask));
         for i in 0..n {
             m.lcp_m[i * n + i] = scratch.diagonal[i];
         }
-        if let Ok(info) = solved {
-            m.recover(nu_free, nu);
-            return Ok(Solved {
-                info,
-                fallback: Some(Fallback::Compliant { eps }),
-                energy_refused,
-                allowance: m.motor_work(),
-            });
+        add_work(info, split.solved());
+        for (g, rung) in scratch.rung.iter_mut().enumerate() {
+            if scratch.mask[g] && !split.failed()[g] {
+                *rung = Rung::Fell(Fallback::Compliant { eps });
+            }
         }
     }
-    // The caller may go on with another solver: give it the rigid problem.
-    m.rhs(nu_free, contacts, p, Offsets::Full);
-    Err(rigid)
+}
+
+/// `info` with the work and the worst rung of `more` added.
+fn add_work(info: &mut SolveInfo, more: SolveInfo) {
+    info.work += more.work;
+    info.rung = info.rung.max_by_ladder(more.rung);
+    info.refined |= more.refined;
+    info.residual = info.residual.max(more.residual);
+}
+
+/// What the step's answer was allowed: the rigid islands' allowances and
+/// the motors' work where an island fell back.
+fn total_allowance(rungs: &[Rung], motors: f64) -> f64 {
+    let rigid: f64 = rungs
+        .iter()
+        .map(|r| match r {
+            Rung::Rigid(a) => *a,
+            _ => 0.0,
+        })
+        .sum();
+    rigid + motors
 }

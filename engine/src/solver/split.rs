@@ -79,6 +79,10 @@ pub struct Split {
     jointed: Vec<bool>,
     /// The islands left to the iterative solver by `exact_islands`.
     pub rest: Vec<u32>,
+    /// Per island, whether the last `lemke` failed on it, and what the
+    /// islands it solved took.
+    failed: Vec<bool>,
+    solved: SolveInfo,
     weighted: Vec<Row>,
 }
 
@@ -161,32 +165,54 @@ impl Split {
     /// Solves `m`'s LCP island by island into `m.z` (sized already): each
     /// island's block from `guess` (the last step's support, by contact
     /// identity; see [`Lemke::solve_guess`]) where one is given, else by
-    /// Lemke's ladder. One island is the whole LCP, solved in place. The
-    /// first island that fails fails the solve.
+    /// Lemke's ladder; with `only`, just the islands it flags (the others'
+    /// unknowns keep their values). One island is the whole LCP, solved in
+    /// place. Every island is tried: one that fails has zeros for its
+    /// unknowns and is flagged in [`Split::failed`]; the error is the
+    /// first failure's, the info the solved islands' together.
     pub fn lemke(
         &mut self,
         lemke: &mut Lemke,
         m: &mut Mlcp,
         guess: Option<&[bool]>,
+        only: Option<&[bool]>,
     ) -> Result<SolveInfo, LemkeError> {
         let (n, nd) = (m.lcp_size(), m.nd);
+        self.failed.clear();
+        self.failed.resize(self.shape.len(), false);
+        self.solved = SolveInfo::default();
+        let take = |g: usize| only.is_none_or(|o| o[g]);
         if self.islands() <= 1 {
+            // The one island with unknowns (if any) is the whole LCP.
+            let Some(g) = (0..self.shape.len()).find(|&g| self.start[g + 1] > self.start[g]) else {
+                return Ok(SolveInfo::default());
+            };
+            if !take(g) {
+                return Ok(SolveInfo::default());
+            }
             let lcp = Lcp {
                 n,
                 m: &m.lcp_m,
                 q: &m.lcp_q,
             };
             let layout = (m.nc, m.nf, m.nd, m.nm);
-            return guess_or_solve(lemke, &lcp, guess, layout, &mut self.slacks, &mut m.z);
+            let solved = guess_or_solve(lemke, &lcp, guess, layout, &mut self.slacks, &mut m.z);
+            self.solved = solved.unwrap_or_default();
+            if solved.is_err() {
+                self.failed[g] = true;
+                m.z.fill(0.0);
+            }
+            return solved;
         }
         let mut total = SolveInfo {
             rung: Rung::Other,
             ..SolveInfo::default()
         };
+        let mut first_error = None;
         for g in 0..self.shape.len() {
             let u = &self.unknowns[self.start[g] as usize..self.start[g + 1] as usize];
             let k = u.len();
-            if k == 0 {
+            if k == 0 || !take(g) {
                 continue;
             }
             self.m.clear();
@@ -194,17 +220,48 @@ impl Split {
                 let row = &m.lcp_m[a as usize * n..][..n];
                 self.m.extend(u.iter().map(|&b| row[b as usize]));
             }
-            let info = self.solve_block(lemke, g, nd, &m.lcp_q, guess)?;
+            let solved = self.solve_block(lemke, g, nd, &m.lcp_q, guess);
             let u = &self.unknowns[self.start[g] as usize..self.start[g + 1] as usize];
-            for (&a, &x) in u.iter().zip(&self.z) {
-                m.z[a as usize] = x;
+            match solved {
+                Ok(info) => {
+                    for (&a, &x) in u.iter().zip(&self.z) {
+                        m.z[a as usize] = x;
+                    }
+                    total.work += info.work;
+                    total.rung = total.rung.max_by_ladder(info.rung);
+                    total.refined |= info.refined;
+                    total.residual = total.residual.max(info.residual);
+                }
+                Err(e) => {
+                    for &a in u {
+                        m.z[a as usize] = 0.0;
+                    }
+                    self.failed[g] = true;
+                    first_error.get_or_insert(e);
+                }
             }
-            total.work += info.work;
-            total.rung = total.rung.max_by_ladder(info.rung);
-            total.refined |= info.refined;
-            total.residual = total.residual.max(info.residual);
         }
-        Ok(total)
+        self.solved = total;
+        match first_error {
+            Some(e) => Err(e),
+            None => Ok(total),
+        }
+    }
+
+    /// What the islands that the last [`Split::lemke`] solved took (all
+    /// of them when it returned `Ok`).
+    pub fn solved(&self) -> SolveInfo {
+        self.solved
+    }
+
+    /// Per island, whether the last [`Split::lemke`] failed on it.
+    pub fn failed(&self) -> &[bool] {
+        &self.failed
+    }
+
+    /// Island `g`'s LCP unknowns (indices into the whole LCP's).
+    pub fn unknowns_of(&self, g: usize) -> &[u32] {
+        &self.unknowns[self.start[g] as usize..self.start[g + 1] as usize]
     }
 
     /// Island `g`'s block, in `self.m` already, solved into `self.z`: its

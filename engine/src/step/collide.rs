@@ -31,26 +31,38 @@ impl Engine {
             }
         }
         let depth = project::Depth::of(&self.model.params, &self.pgs_params);
-        self.projected = match depth.map(|depth| {
+        let state = &mut self.state;
+        let drifted = std::mem::take(&mut state.drifted);
+        let projected = depth.map(|depth| {
+            let bodies = project::Bodies {
+                minv: &ws.minv,
+                jointed: &self.model.jointed,
+                drifted: &drifted,
+            };
             project::deep_penetration(
                 &ws.contacts,
-                &ws.minv,
-                &self.model.jointed,
+                bodies,
+                &self.model.joints,
                 depth,
-                &mut self.state,
+                state,
                 &mut self.lemke,
                 &mut ws.projection,
             )
-        }) {
-            None => 0,
-            Some(Ok(n)) => n,
+        });
+        // Held for the next restore's sake: a vector of falses again.
+        state.drifted = drifted;
+        state.drifted.fill(false);
+        let projected = match projected {
+            None => project::Projected::default(),
+            Some(Ok(p)) => p,
             Some(Err(e)) => {
                 // The velocity stabilisation still acts on the contacts.
                 tracing::warn!("projection out of deep penetration failed: {e}");
-                0
+                project::Projected::default()
             }
         };
-        if self.projected > 0 {
+        self.projected = projected.contacts;
+        if projected != project::Projected::default() {
             // The bodies moved: their contacts are those of the new positions.
             ws.contact_set(&self.model, &self.state);
         }

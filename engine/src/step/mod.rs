@@ -299,6 +299,7 @@ impl Engine {
             return self.failed(report, clock, e);
         }
         self.advance(&mut report);
+        self.state.drifted.clone_from(&self.ws.drifted);
         self.sleep(&mut report);
         clock.timings.integrate = clock.lap.lap();
         let report = self.measure(report, clock);

@@ -26,6 +26,8 @@ impl Engine {
         let model = &self.model;
         let ws = &mut self.ws;
         ws.select(model, &self.state, &self.inputs);
+        ws.drifted.clear();
+        ws.drifted.resize(model.bodies.len(), false);
         let p = &model.params;
         let mut canonical = false;
         let mut pgs_settled;
@@ -116,6 +118,10 @@ impl Engine {
                     match solved {
                         Ok(s) => {
                             relaxed = report.took(s.fallback, s.energy_refused, s.allowance);
+                            if relaxed {
+                                let fallback = &ws.fallback;
+                                mark_drifted(m, &ws.groups, |g| fallback.fell(g), &mut ws.drifted);
+                            }
                             report.lemke_islands = ws.fallback.islands();
                             report.pgs_islands = 0;
                             let info = s.info;
@@ -170,6 +176,10 @@ impl Engine {
                         &mut ws.iterative,
                     );
                     relaxed = report.took(solved.fallback, solved.energy_refused, solved.allowance);
+                    if relaxed {
+                        let iterative = &ws.iterative;
+                        mark_drifted(m, &ws.groups, |g| iterative.fell(g), &mut ws.drifted);
+                    }
                     let exact = ws.iterative.exact();
                     report.lemke_islands = exact.islands;
                     report.pgs_islands = ws.iterative.iterated();
@@ -249,6 +259,24 @@ impl Engine {
             canonical = true;
             if !prune::keep_active(&mut ws.contacts, &ws.mlcp, &ws.nu) {
                 return Ok(());
+            }
+        }
+    }
+}
+
+/// Marks in `drifted` the bodies on the joint rows of the islands that
+/// `fell` back: their relaxed problem had no drift term, so the next
+/// step's projection holds their joints together (`integrate::project`).
+fn mark_drifted(
+    m: &crate::solver::mlcp::Mlcp,
+    groups: &island::Groups,
+    fell: impl Fn(usize) -> bool,
+    drifted: &mut [bool],
+) {
+    for (k, row) in m.rows[..m.nb].iter().enumerate() {
+        if fell(groups.island_of_row(k)) {
+            for j in [row.a, row.b].into_iter().flatten() {
+                drifted[j.body] = true;
             }
         }
     }

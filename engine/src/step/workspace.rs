@@ -76,6 +76,9 @@ pub(super) struct Workspace {
     pub(super) guess: Vec<bool>,
     pub(super) fallback: fallback::Scratch,
     pub(super) iterative: iterative::Scratch,
+    /// Per body: its island fell back in this step's solve (copied into
+    /// `State::drifted` when the step succeeds).
+    pub(super) drifted: Vec<bool>,
 }
 
 /// The geometry the collision stage lists for `state` into `out`, with

@@ -5,6 +5,7 @@
 use super::Mlcp;
 use crate::constraint::applied::InvMass;
 use crate::model::Params;
+use crate::solver::island::Groups;
 
 impl Mlcp {
     /// `K(nu') - K(nu_free)` of the last [`Mlcp::recover`], from the rows
@@ -45,22 +46,31 @@ impl Mlcp {
     /// physics, and `engine::fallback` refuses it.
     pub fn stabilisation_budget(&self, p: &Params, minv: &[InvMass]) -> f64 {
         let nb = self.nb;
-        let row = |k: usize, spring: Option<crate::model::Compliance>| {
-            let v = self.offset[k];
-            let d = self.rows[k].coupling(&self.rows[k], minv) + self.cfm[k];
-            let kinetic = if d > 0.0 { 0.5 * v * v / d } else { 0.0 };
-            let stored = spring.map_or(0.0, |k| {
-                let psi = v * p.h / k.erp(p.h);
-                0.5 * k.stiffness * psi * psi
-            });
-            kinetic + stored
-        };
+        let row = |k: usize, spring| self.row_budget(p, minv, k, spring);
         let joints: f64 = (0..nb).map(|k| row(k, p.joint_compliance)).sum();
         let contacts: f64 = (nb..nb + self.nc)
             .filter(|&k| self.offset[k] < 0.0)
             .map(|k| row(k, p.contact_compliance))
             .sum();
         joints + contacts + self.motor_work()
+    }
+
+    /// Row `k`'s share of [`Mlcp::stabilisation_budget`].
+    fn row_budget(
+        &self,
+        p: &Params,
+        minv: &[InvMass],
+        k: usize,
+        spring: Option<crate::model::Compliance>,
+    ) -> f64 {
+        let v = self.offset[k];
+        let d = self.rows[k].coupling(&self.rows[k], minv) + self.cfm[k];
+        let kinetic = if d > 0.0 { 0.5 * v * v / d } else { 0.0 };
+        let stored = spring.map_or(0.0, |k| {
+            let psi = v * p.h / k.erp(p.h);
+            0.5 * k.stiffness * psi * psi
+        });
+        kinetic + stored
     }
 
     /// The most work the motors can do in a step (J): a motor's row gives
@@ -98,5 +108,125 @@ impl Mlcp {
             .map(|i| (self.z[i] * offset[nb + i].min(0.0)).abs())
             .sum();
         joints + contacts
+    }
+
+    /// The island (of `groups`) of basis row `k` (`[G_b, G_n, G_t1,
+    /// G_t2, G_m]`): a friction row's is its normal row's, a motor's its
+    /// joint's.
+    pub fn basis_island(&self, groups: &Groups, k: usize) -> usize {
+        let (nb, nc, nf) = (self.nb, self.nc, self.nf);
+        let row = if k < nb + nc {
+            k
+        } else if k < nb + nc + 2 * nf {
+            nb + self.friction_of[(k - nb - nc) / 2]
+        } else {
+            self.motor_row[k - nb - nc - 2 * nf]
+        };
+        groups.island_of_row(row)
+    }
+
+    /// The island of row `k` of [`Mlcp::rows`] as the iterative solver
+    /// has them (joint, normal, `n_d` friction rows per block, motors).
+    pub fn row_island(&self, groups: &Groups, k: usize) -> usize {
+        let (nb, nc) = (self.nb, self.nc);
+        let motors = self.motor_rows();
+        let row = if k < nb + nc {
+            k
+        } else if k < motors {
+            nb + self.friction_of[(k - nb - nc) / self.nd]
+        } else {
+            self.motor_row[k - motors]
+        };
+        groups.island_of_row(row)
+    }
+
+    /// [`Mlcp::kinetic_change`] island by island into `out` (one entry per
+    /// island of `groups`): the rows' terms summed per island in the same
+    /// order, so an island's sum does not depend on the others.
+    pub fn kinetic_change_by_island(
+        &self,
+        groups: &Groups,
+        nu_free: &[f64],
+        nu: &[f64],
+        out: &mut Vec<f64>,
+    ) {
+        out.clear();
+        out.resize(groups.len(), 0.0);
+        let nb = self.nb;
+        for (k, row) in self.basis.iter().enumerate() {
+            let lambda = if k < nb { self.p_b[k] } else { self.zb[k - nb] };
+            if lambda != 0.0 {
+                out[self.basis_island(groups, k)] +=
+                    0.5 * lambda * (row.velocity(nu) + row.velocity(nu_free));
+            }
+        }
+    }
+
+    /// [`Mlcp::kinetic_change_rows`] island by island into `out`.
+    pub fn kinetic_change_rows_by_island(
+        &self,
+        groups: &Groups,
+        lambda: &[f64],
+        nu_free: &[f64],
+        nu: &[f64],
+        out: &mut Vec<f64>,
+    ) {
+        out.clear();
+        out.resize(groups.len(), 0.0);
+        for (k, (row, &l)) in self.rows.iter().zip(lambda).enumerate() {
+            if l != 0.0 {
+                out[self.row_island(groups, k)] +=
+                    0.5 * l * (row.velocity(nu) + row.velocity(nu_free));
+            }
+        }
+    }
+
+    /// [`Mlcp::stabilisation_budget`] island by island into `out`.
+    pub fn stabilisation_budget_by_island(
+        &self,
+        p: &Params,
+        minv: &[InvMass],
+        groups: &Groups,
+        out: &mut Vec<f64>,
+    ) {
+        out.clear();
+        out.resize(groups.len(), 0.0);
+        let nb = self.nb;
+        for k in 0..nb + self.nc {
+            let (joint, v) = (k < nb, self.offset[k]);
+            if joint || v < 0.0 {
+                let spring = if joint {
+                    p.joint_compliance
+                } else {
+                    p.contact_compliance
+                };
+                out[groups.island_of_row(k)] += self.row_budget(p, minv, k, spring);
+            }
+        }
+        for (k, (cap, v)) in self.motor_cap.iter().zip(&self.motor_speed).enumerate() {
+            out[groups.island_of_row(self.motor_row[k])] += cap * v.abs();
+        }
+    }
+
+    /// [`Mlcp::motor_work`] island by island into `out`.
+    pub fn motor_work_by_island(&self, groups: &Groups, out: &mut Vec<f64>) {
+        out.clear();
+        out.resize(groups.len(), 0.0);
+        for (k, (cap, v)) in self.motor_cap.iter().zip(&self.motor_speed).enumerate() {
+            out[groups.island_of_row(self.motor_row[k])] += cap * v.abs();
+        }
+    }
+
+    /// [`Mlcp::offset_work`] island by island into `out`.
+    pub fn offset_work_by_island(&self, offset: &[f64], groups: &Groups, out: &mut Vec<f64>) {
+        out.clear();
+        out.resize(groups.len(), 0.0);
+        let nb = self.nb;
+        for k in 0..nb {
+            out[groups.island_of_row(k)] += (self.p_b[k] * offset[k]).abs();
+        }
+        for i in 0..self.nc {
+            out[groups.island_of_row(nb + i)] += (self.z[i] * offset[nb + i].min(0.0)).abs();
+        }
     }
 }

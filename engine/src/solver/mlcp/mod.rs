@@ -52,6 +52,10 @@ mod recover;
 mod restrict;
 mod schur;
 
+/// Dense Cholesky and triangular solves for small blocks (the joint
+/// block's, and the projection's in `integrate::project`).
+pub use schur::small;
+
 use schur::solve_lower;
 
 use crate::constraint::applied::InvMass;
@@ -166,11 +170,18 @@ pub const HELD: f64 = 1e-6;
 /// (`Mlcp::motor_work`). Their bounded pairs keep it solvable: the slack
 /// row `F h - p+ - p-` of the homogeneous problem is `-p+ - p- >= 0`, so
 /// its `x` is zero on the pairs and the argument holds as it is.
+///
+/// `Islands` is `Relaxed` on the rows of the islands
+/// [`Mlcp::relax_islands`] marked and `Full` on the rest: a fallback is
+/// taken per island. The joint block is block-diagonal by island, so the
+/// other islands' `q` keeps its bits (their rows see exact zeros from the
+/// relaxed rows).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Offsets {
     #[default]
     Full,
     Relaxed,
+    Islands,
 }
 
 /// The step's mLCP, its reduction and its scratch space.
@@ -264,6 +275,8 @@ pub struct Mlcp {
     /// `Some(matrix_free)` while the matrix part is that of the current
     /// positions and `lcp_contacts` (see [`Mlcp::matrix_for`]).
     matrix_of: Option<bool>,
+    /// Per joint and normal row, whether [`Offsets::Islands`] relaxes it.
+    relaxed_row: Vec<bool>,
 }
 
 /// How [`Mlcp::matrix_for`] came by the matrix.
@@ -563,13 +576,30 @@ impl Mlcp {
         self.b.clear();
         for (k, row) in self.basis.iter().enumerate() {
             let v = row.velocity(nu_free);
-            let drift = k < nb && offsets == Offsets::Full;
+            let drift = k < nb && !self.relaxes(offsets, k);
             self.b.push(if drift { v + self.offset[k] } else { v });
         }
         self.yb.clear();
         self.yb.extend_from_slice(&self.b[..nb]);
         solve_lower(&self.chol, nb, &mut self.yb);
         self.form_rhs(contacts, p, offsets);
+    }
+
+    /// Marks the joint and normal rows of the islands `relax` flags (by
+    /// `groups`, the step's islands) for [`Offsets::Islands`].
+    pub fn relax_islands(&mut self, groups: &crate::solver::island::Groups, relax: &[bool]) {
+        self.relaxed_row.clear();
+        self.relaxed_row
+            .extend((0..self.nb + self.nc).map(|k| relax[groups.island_of_row(k)]));
+    }
+
+    /// Whether joint or normal row `k` is relaxed under `offsets`.
+    fn relaxes(&self, offsets: Offsets, k: usize) -> bool {
+        match offsets {
+            Offsets::Full => false,
+            Offsets::Relaxed => true,
+            Offsets::Islands => self.relaxed_row[k],
+        }
     }
 
     /// Fills [`Mlcp::coeffs`]: contact row `i` of the LCP (normal rows,

@@ -28,7 +28,7 @@ pub(super) const SMALL_BLOCK: usize = 24;
 
 /// Cholesky factorisation and triangular solves for small column-major
 /// blocks, where plain loops beat any dispatch.
-pub(super) mod small {
+pub mod small {
     /// `A = L L^T` in place (lower triangle, column-major `n x n`); the
     /// index of the first pivot that is not positive on failure.
     pub fn cholesky(a: &mut [f64], n: usize) -> Result<(), usize> {
@@ -192,9 +192,10 @@ impl Mlcp {
         for i in 0..self.nc {
             let c = &contacts[self.lcp_contacts[i]];
             let held = self.held.get(i).copied().unwrap_or(false);
-            let a_n = match offsets {
-                Offsets::Full if !held => normal_offset(c, self.lcp_q[i], p),
-                _ => normal_offset(c, self.lcp_q[i], p).max(0.0),
+            let a_n = if !held && !self.relaxes(offsets, nb + i) {
+                normal_offset(c, self.lcp_q[i], p)
+            } else {
+                normal_offset(c, self.lcp_q[i], p).max(0.0)
             };
             self.lcp_q[i] += a_n;
             if held {

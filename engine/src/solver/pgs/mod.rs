@@ -69,6 +69,9 @@ pub struct PgsProblem<'a> {
     /// The islands to iterate (the others are solved already: their
     /// impulses are part of the warm start and stay).
     pub iterate: &'a [u32],
+    /// Islands iterated in plain sweeps, without the momentum step
+    /// (`iterative.rs`'s descent from zero impulses); empty: none.
+    pub descend: &'a [bool],
     /// Per motor, its joint's first row (its island's) and its bound
     /// `F h`: the box its impulse is projected on (motor.rs).
     pub motor_row: &'a [usize],
@@ -330,7 +333,13 @@ impl Pgs {
             residual: f64::INFINITY,
             converged: true,
         };
+        let plain = PgsParams {
+            momentum: false,
+            ..*params
+        };
         for &g in p.iterate {
+            let descend = p.descend.get(g as usize).copied().unwrap_or(false);
+            let params = if descend { &plain } else { params };
             let (iterations, converged) = self.iterate(p, params, g as usize, nu);
             info.iterations = info.iterations.max(iterations);
             info.converged &= converged;
