@@ -9,7 +9,7 @@ use cosim_engine::solver::PgsParams;
 use cosim_engine::{Engine, ImpulseKind, Model};
 use cosim_figures::{color, FONT};
 use cosim_shared::num;
-use cosim_shared::{FrictionCone, PositionUpdate, Scene, SolverChoice};
+use cosim_shared::{FrictionCone, Integrator, PositionUpdate, Scene, SolverChoice};
 use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -27,6 +27,8 @@ pub struct Setting {
     pub full: bool,
     pub cone: FrictionCone,
     pub position_update: PositionUpdate,
+    /// The smooth islands' step (only the chains have one).
+    pub integrator: Integrator,
 }
 
 impl Setting {
@@ -47,6 +49,20 @@ impl Setting {
             full,
             cone: FrictionCone::Polyhedral,
             position_update: PositionUpdate::Euler,
+            integrator: Integrator::Euler,
+        }
+    }
+    /// Lemke, n_d = 8, with the smooth islands stepped by `integrator`.
+    pub fn smooth(integrator: Integrator) -> Setting {
+        let name = match integrator {
+            Integrator::Rattle4 => "rattle4",
+            Integrator::Rattle => "rattle",
+            Integrator::Euler => "euler",
+        };
+        Setting {
+            name: name.into(),
+            integrator,
+            ..Setting::lemke(8, false)
         }
     }
     pub fn pgs(tolerance: f64, cone: FrictionCone) -> Setting {
@@ -63,6 +79,7 @@ impl Setting {
             full: false,
             cone,
             position_update: PositionUpdate::Euler,
+            integrator: Integrator::Euler,
         }
     }
 }
@@ -114,7 +131,7 @@ impl Point {
         format!(
             "{},{},{},{},{},{},{},{},\"{}\",{},{}",
             self.engine,
-            self.setting,
+            field(&self.setting),
             self.case.key(),
             num(self.h),
             self.steps,
@@ -123,7 +140,7 @@ impl Point {
             num(self.score.error),
             self.case.error_name(),
             metrics.join(";"),
-            self.failure.as_deref().unwrap_or("")
+            field(self.failure.as_deref().unwrap_or(""))
         )
     }
 }
@@ -159,6 +176,7 @@ fn model(case: CaseId, setting: &Setting, h: f64) -> Result<(Scene, Model), Stri
     scene.sim.solver = setting.solver;
     scene.sim.friction_cone = setting.cone;
     scene.sim.position_update = setting.position_update;
+    scene.sim.integrator = setting.integrator;
     let mut model = Model::from_scene(&scene);
     model.params.full = setting.full;
     Ok((scene, model))
@@ -286,6 +304,69 @@ pub fn reference_trajectory(h: f64, nd: usize) -> Result<Trajectory, String> {
     Ok(out)
 }
 
+/// Body positions of `case` at time `t` (Lemke, n_d = 8, step `h`).
+fn positions_at(case: CaseId, h: f64, t: f64) -> Result<Vec<[f64; 3]>, String> {
+    let setting = Setting::lemke(8, false);
+    let mut e = engine(model(case, &setting, h)?.1, &setting);
+    for _ in 0..(t / h).round() as u64 {
+        let r = e.step();
+        if let Some(err) = r.error {
+            return Err(format!(
+                "{} reference at h = {h:e}: step {}: {err}",
+                case.key(),
+                r.step + 1
+            ));
+        }
+    }
+    Ok(e.state().bodies.iter().map(|b| b.x.into()).collect())
+}
+
+/// The converged reference of a case, where it is scored against one, and
+/// a note on how converged it is: the reference scene's run at `h / 2`
+/// (checked against `h`); for S4 and S7 (smooth, no contact, so our step
+/// is first order in h) the positions at `CHAIN_REFERENCE_T` from runs at
+/// `h`, `h / 2` and `h / 4`, Richardson-extrapolated from the finer pair
+/// (`2 x(h/4) - x(h/2)`), with the coarser pair's extrapolation as its
+/// check.
+pub fn case_reference(case: CaseId, h: f64) -> Result<Option<(Trajectory, String)>, String> {
+    match case {
+        CaseId::Reference => {
+            let a = reference_trajectory(h, 8)?;
+            let b = reference_trajectory(h / 2.0, 8)?;
+            let note = format!(
+                "REF: converged run at h = {h:e}; it differs from the run at h/2 by {:.3e} m (largest position difference at the 0.01 s samples)",
+                trajectory_distance(&a, &b)
+            );
+            Ok(Some((b, note)))
+        }
+        CaseId::Chain | CaseId::HingeChain => {
+            let t = super::cases::CHAIN_REFERENCE_T;
+            let x: Vec<Vec<[f64; 3]>> = [h, h / 2.0, h / 4.0]
+                .iter()
+                .map(|&h| positions_at(case, h, t))
+                .collect::<Result<_, _>>()?;
+            let extrapolate = |coarse: &[[f64; 3]], fine: &[[f64; 3]]| -> Vec<[f64; 3]> {
+                coarse
+                    .iter()
+                    .zip(fine)
+                    .map(|(c, f)| std::array::from_fn(|k| 2.0 * f[k] - c[k]))
+                    .collect()
+            };
+            let (r1, r2) = (extrapolate(&x[0], &x[1]), extrapolate(&x[1], &x[2]));
+            let note = format!(
+                "{}: reference positions at t = {t} s from our runs at h = {h:e}, {:e}, {:e} (Lemke), Richardson-extrapolated (first order); the finest run is {:.3e} m from it, the coarser pair's extrapolation {:.3e} m",
+                case.key(),
+                h / 2.0,
+                h / 4.0,
+                super::farthest(&x[2], &r2),
+                super::farthest(&r1, &r2),
+            );
+            Ok(Some((vec![(t, r2)], note)))
+        }
+        _ => Ok(None),
+    }
+}
+
 /// Largest position difference between two trajectories at common times.
 pub fn trajectory_distance(a: &Trajectory, b: &Trajectory) -> f64 {
     a.iter()
@@ -317,6 +398,8 @@ impl Sweep {
                 Setting::pgs(1e-6, FrictionCone::Polyhedral),
                 Setting::pgs(1e-10, FrictionCone::Polyhedral),
                 Setting::pgs(1e-6, FrictionCone::Circular),
+                Setting::smooth(Integrator::Rattle),
+                Setting::smooth(Integrator::Rattle4),
             ],
             reference_h: 2e-5,
         }
@@ -331,6 +414,7 @@ impl Sweep {
                 Setting::lemke(8, false),
                 Setting::pgs(1e-6, FrictionCone::Polyhedral),
                 Setting::trapezoid(),
+                Setting::smooth(Integrator::Rattle4),
             ],
             reference_h: 1e-4,
         }
@@ -345,7 +429,8 @@ fn relevant(case: CaseId, s: &Setting) -> bool {
         CaseId::Rolling | CaseId::SlideToRoll | CaseId::BoxIncline | CaseId::Reference
     );
     let contacts = !matches!(case, CaseId::Chain | CaseId::HingeChain);
-    (s.nd == 8 || friction)
+    (s.integrator == Integrator::Euler || !contacts)
+        && (s.nd == 8 || friction)
         && (!s.full || contacts)
         && (s.cone == FrictionCone::Polyhedral || friction)
 }
@@ -358,18 +443,10 @@ pub fn sweep(
     let mut points = Vec::new();
     let mut notes = Vec::new();
     for &case in &sw.cases {
-        let reference = if case == CaseId::Reference {
-            let a = reference_trajectory(sw.reference_h, 8)?;
-            let b = reference_trajectory(sw.reference_h / 2.0, 8)?;
-            notes.push(format!(
-                "REF: converged run at h = {:e}; it differs from the run at h/2 by {:.3e} m (largest position difference at the 0.01 s samples)",
-                sw.reference_h,
-                trajectory_distance(&a, &b)
-            ));
-            Some(b)
-        } else {
-            None
-        };
+        let reference = case_reference(case, sw.reference_h)?.map(|(r, note)| {
+            notes.push(note);
+            r
+        });
         for setting in sw.settings.iter().filter(|s| relevant(case, s)) {
             for &h in &sw.steps {
                 let p = run_ours(case, setting, h, reference.as_ref())?;
@@ -379,6 +456,17 @@ pub fn sweep(
         }
     }
     Ok((points, notes))
+}
+
+/// A CSV field as RFC 4180 has it: quoted (its quotes doubled) where it
+/// holds a comma, a quote or a line break (MuJoCo's settings read
+/// "Euler, Newton, pyramidal").
+fn field(s: &str) -> std::borrow::Cow<'_, str> {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\"")).into()
+    } else {
+        s.into()
+    }
 }
 
 pub fn csv(points: &[Point]) -> String {
@@ -413,27 +501,65 @@ pub fn diagrams(points: &[Point], dir: &Path, machine: &str) -> Result<Vec<PathB
             continue;
         }
         let path = dir.join(format!("accuracy-{}.png", case.key()));
-        draw(&pts, case, &path, machine).map_err(|e| format!("{}: {e}", path.display()))?;
+        let figure = Figure {
+            title: case.title(),
+            y_name: case.error_name(),
+            y: &|p: &Point| p.score.error,
+        };
+        draw(&pts, &figure, &path, machine).map_err(|e| format!("{}: {e}", path.display()))?;
         files.push(path);
+        // The chains' second score: the position at 1 s against the
+        // converged reference.
+        if matches!(case, CaseId::Chain | CaseId::HingeChain) {
+            let position = |p: &Point| p.score.metric(POSITION_1S).unwrap_or(f64::NAN);
+            let pts: Vec<&Point> = pts
+                .into_iter()
+                .filter(|p| position(p).is_finite())
+                .collect();
+            if pts.is_empty() {
+                continue;
+            }
+            let title = format!("{}, position at 1 s", case.key());
+            let figure = Figure {
+                title: &title,
+                y_name: "largest position error at t = 1 s (m)",
+                y: &position,
+            };
+            let path = dir.join(format!("accuracy-{}-position.png", case.key()));
+            draw(&pts, &figure, &path, machine).map_err(|e| format!("{}: {e}", path.display()))?;
+            files.push(path);
+        }
     }
     Ok(files)
 }
 
+/// The chains' metric of the position error at `CHAIN_REFERENCE_T`.
+pub const POSITION_1S: &str = "position_error_1s_m";
+
+/// What a work-precision diagram draws: its title, its y axis and each
+/// point's value on it.
+struct Figure<'a> {
+    title: &'a str,
+    y_name: &'a str,
+    y: &'a dyn Fn(&Point) -> f64,
+}
+
 fn draw(
     pts: &[&Point],
-    case: CaseId,
+    figure: &Figure,
     path: &Path,
     machine: &str,
 ) -> Result<(), Box<dyn std::error::Error>> {
+    let y = |p: &Point| (figure.y)(p).max(ERROR_FLOOR);
     let root = BitMapBackend::new(path, (1000, 720)).into_drawing_area();
     let mut chart = cosim_figures::log_log(
         &root,
-        &format!("{} ({})", case.title(), machine),
+        &format!("{} ({})", figure.title, machine),
         bounds(pts.iter().map(|p| p.wall_per_sim_s)),
-        bounds(pts.iter().map(|p| p.score.error.max(ERROR_FLOOR))),
+        bounds(pts.iter().map(|p| y(p))),
         (
             "wall time per simulated second (s), one thread",
-            case.error_name(),
+            figure.y_name,
         ),
         (|x| format!("{x:.0e}"), |y| format!("{y:.0e}")),
     )?;
@@ -457,7 +583,7 @@ fn draw(
         let mut line: Vec<(f64, f64)> = pts
             .iter()
             .filter(|p| &p.engine == engine && &p.setting == setting)
-            .map(|p| (p.wall_per_sim_s, p.score.error.max(ERROR_FLOOR)))
+            .map(|p| (p.wall_per_sim_s, y(p)))
             .collect();
         line.sort_by(|a, b| a.0.total_cmp(&b.0));
         let c = if engine == "ours" {
@@ -613,4 +739,19 @@ pub fn write(
     }
     files.extend(diagrams(points, dir, machine)?);
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::field;
+
+    #[test]
+    fn a_field_with_a_comma_or_a_quote_is_quoted() {
+        assert_eq!(field("lemke nd=8"), "lemke nd=8");
+        assert_eq!(
+            field("Euler, Newton, pyramidal"),
+            "\"Euler, Newton, pyramidal\""
+        );
+        assert_eq!(field("say \"hi\""), "\"say \"\"hi\"\"\"");
+    }
 }

@@ -188,19 +188,18 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    // The converged reference of the REF case, as our sweep used it.
-    let reference = if sweep.cases.contains(&CaseId::Reference) {
-        match accuracy::reference_trajectory(sweep.reference_h / 2.0, 8) {
-            Ok(r) => Some(r),
+    // Each case's converged reference, as our sweep used it.
+    let mut references = Vec::new();
+    for &case in &sweep.cases {
+        match accuracy::case_reference(case, sweep.reference_h) {
+            Ok(r) => references.push(r.map(|(r, _)| r)),
             Err(e) => {
                 eprintln!("error: {e}");
                 return ExitCode::FAILURE;
             }
         }
-    } else {
-        None
-    };
-    for &case in &sweep.cases {
+    }
+    for (&case, reference) in sweep.cases.iter().zip(&references) {
         for &h in &sweep.steps {
             for p in rapier::run(case, h, reference.as_ref()) {
                 show(&p);
@@ -213,7 +212,7 @@ fn main() -> ExitCode {
             notes.push(format!(
                 "MuJoCo {version} (Python package; whole runs timed with mujoco.rollout, a C loop)"
             ));
-            for &case in &sweep.cases {
+            for (&case, reference) in sweep.cases.iter().zip(&references) {
                 // Euler is MuJoCo's default; RK4 what a user picks for a
                 // smooth system (it pays on the contact-free chain).
                 for integrator in ["Euler", "RK4"] {

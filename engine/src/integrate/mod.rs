@@ -20,6 +20,7 @@
 //! half a step into the surface it hit.
 
 pub mod project;
+pub mod rattle;
 
 use crate::model::state::State;
 use cosim_shared::PositionUpdate;

@@ -153,6 +153,11 @@ pub struct StepReport {
     /// in flight has no LCP: Lemke's count leaves it out.
     pub lemke_islands: usize,
     pub pgs_islands: usize,
+    /// Islands stepped by RATTLE (`integrator = "rattle"` or "rattle4"),
+    /// and those that could have been but whose position iteration failed
+    /// (left to the velocity-level step).
+    pub smooth_islands: usize,
+    pub smooth_left: usize,
     /// Bodies asleep after the step (`sleep.rs`).
     pub sleeping: usize,
     /// Left-out contacts that the velocity check added back (re-solves).

@@ -756,6 +756,7 @@ impl Model {
                     .map(Compliance::from),
                 joint_compliance: scene.compliance.and_then(|c| c.joint).map(Compliance::from),
                 position_update: s.position_update,
+                integrator: s.integrator,
                 sleep: s.sleep.enabled.then_some(Sleep {
                     after: s.sleep.after,
                     linear: s.sleep.linear_speed,

@@ -36,6 +36,8 @@ pub struct Params {
     pub contact_compliance: Option<Compliance>,
     pub joint_compliance: Option<Compliance>,
     pub position_update: cosim_shared::PositionUpdate,
+    /// The smooth islands' step (`integrate::rattle`).
+    pub integrator: cosim_shared::Integrator,
     /// Sleeping islands at rest (`sleep.rs`); `None`: every body steps.
     pub sleep: Option<Sleep>,
     /// The iterative solver's stopping rule (the scene's `[sim.pgs]`).

@@ -2,16 +2,21 @@
 
 use super::Engine;
 use crate::integrate;
+use crate::integrate::rattle;
 use crate::measure::report::StepError;
+use crate::measure::report::StepReport;
 use crate::model::{Attachment, Counterpart};
+use cosim_shared::Integrator;
 
 impl Engine {
     /// The new poses from `nu'` (the trapezoid update keeps Euler's for
     /// the bodies `mark_impulsive` lists); a pose that is not finite fails
     /// the step.
-    pub(super) fn integrate(&mut self) -> Result<(), StepError> {
+    pub(super) fn integrate(&mut self, report: &mut StepReport) -> Result<(), StepError> {
         let _span = tracing::trace_span!("integrate").entered();
         self.mark_impulsive();
+        // The smooth islands' RATTLE step, from the step's start.
+        self.smooth_islands(report);
         let p = &self.model.params;
         let ws = &mut self.ws;
         ws.awake.refresh(&self.state);
@@ -24,7 +29,109 @@ impl Engine {
             ws.awake.bodies(),
             &mut ws.poses,
         )
-        .map_err(|body| StepError::NonFinitePose { body })
+        .map_err(|body| StepError::NonFinitePose { body })?;
+        let smooth = &ws.smooth;
+        for (&i, b) in smooth.bodies.iter().zip(&smooth.states) {
+            self.state.bodies[i as usize] = *b;
+        }
+        Ok(())
+    }
+
+    /// With `integrator = "rattle"` or `"rattle4"`, the islands with
+    /// joints and no contact (no listed contact or limit on any of their
+    /// bodies: none within reach of the step), no motor and no joint
+    /// compliance, stepped by RATTLE (`integrate::rattle`) from the step's
+    /// start into `ws.smooth`; the step's own answer for them is replaced
+    /// after the position update. An island whose RATTLE iteration fails
+    /// keeps the step's answer and is counted.
+    fn smooth_islands(&mut self, report: &mut StepReport) {
+        let (model, ws) = (&self.model, &mut self.ws);
+        let smooth = &mut ws.smooth;
+        smooth.bodies.clear();
+        smooth.states.clear();
+        let p = &model.params;
+        if p.integrator == Integrator::Euler
+            || p.joint_compliance.is_some()
+            || model.joints.is_empty()
+        {
+            return;
+        }
+        let groups = &ws.groups;
+        let nb = ws.mlcp.nb;
+        // Per island: whether it may take RATTLE (only joint rows, no
+        // motor, every body awake and in no listed contact).
+        smooth.ok.clear();
+        smooth.ok.resize(groups.len(), true);
+        for g in 0..groups.len() {
+            if groups.rows_of(g).iter().any(|&k| k as usize >= nb) {
+                smooth.ok[g] = false;
+            }
+        }
+        for &j in &model.motors {
+            smooth.ok[groups.island_of_row(model.joint_start[j])] = false;
+        }
+        smooth.island_of.clear();
+        smooth.island_of.resize(model.bodies.len(), u32::MAX);
+        for (k, row) in ws.mlcp.rows[..nb].iter().enumerate() {
+            for j in [row.a, row.b].into_iter().flatten() {
+                smooth.island_of[j.body] = groups.island_of_row(k) as u32;
+            }
+        }
+        let mut off = |i: usize| {
+            if let Some(&g) = smooth.island_of.get(i).filter(|&&g| g != u32::MAX) {
+                smooth.ok[g as usize] = false;
+            }
+        };
+        for c in &ws.contacts {
+            off(c.geom.a);
+            if let crate::model::Counterpart::Body(j) = c.geom.b {
+                off(j);
+            }
+        }
+        for i in 0..model.bodies.len() {
+            if crate::model::state::asleep(&self.state, i) {
+                off(i);
+            }
+        }
+        for g in 0..groups.len() {
+            if !smooth.ok[g] || groups.rows_of(g).is_empty() {
+                continue;
+            }
+            smooth.island_bodies.clear();
+            smooth.island_bodies.extend(
+                (0..model.bodies.len() as u32)
+                    .filter(|&i| smooth.island_of[i as usize] == g as u32),
+            );
+            smooth.island_joints.clear();
+            smooth.island_joints.extend(
+                (0..model.joints.len() as u32)
+                    .filter(|&j| groups.island_of_row(model.joint_start[j as usize]) == g),
+            );
+            let island = rattle::Island {
+                bodies: &smooth.island_bodies,
+                joints: &smooth.island_joints,
+            };
+            let stepped = rattle::step(
+                model,
+                &self.state,
+                &self.inputs,
+                island,
+                p.integrator,
+                &mut smooth.rattle,
+                &mut smooth.out,
+            );
+            match stepped {
+                Ok(()) => {
+                    report.smooth_islands += 1;
+                    smooth.bodies.extend_from_slice(&smooth.island_bodies);
+                    smooth.states.extend_from_slice(&smooth.out);
+                }
+                Err(e) => {
+                    report.smooth_left += 1;
+                    tracing::debug!("island {g} left to the step: {e:?}");
+                }
+            }
+        }
     }
 
     /// For the trapezoid update, the bodies that keep the Euler update: the

@@ -49,6 +49,8 @@ impl Engine {
             islands: 0,
             largest_island: 0,
             lemke_islands: 0,
+            smooth_islands: 0,
+            smooth_left: 0,
             pgs_islands: 0,
             sleeping: 0,
             energy: Default::default(),

@@ -291,7 +291,7 @@ impl Engine {
         let (mut report, mut clock) = self.open_report();
         let solved = self
             .solve(&mut report, &mut clock)
-            .and_then(|()| self.integrate());
+            .and_then(|()| self.integrate(&mut report));
         if began.impulses {
             self.inputs.clear_impulses();
         }

@@ -79,6 +79,23 @@ pub(super) struct Workspace {
     /// Per body: its island fell back in this step's solve (copied into
     /// `State::drifted` when the step succeeds).
     pub(super) drifted: Vec<bool>,
+    /// The smooth islands' RATTLE step (`integrate.rs`).
+    pub(super) smooth: Smooth,
+}
+
+/// Scratch of the smooth islands' step: per island whether it takes
+/// RATTLE, each body's island, one island's bodies and joints, and the
+/// bodies stepped with their new states.
+#[derive(Default)]
+pub(super) struct Smooth {
+    pub(super) ok: Vec<bool>,
+    pub(super) island_of: Vec<u32>,
+    pub(super) island_bodies: Vec<u32>,
+    pub(super) island_joints: Vec<u32>,
+    pub(super) out: Vec<crate::model::state::BodyState>,
+    pub(super) bodies: Vec<u32>,
+    pub(super) states: Vec<crate::model::state::BodyState>,
+    pub(super) rattle: crate::integrate::rattle::Rattle,
 }
 
 /// The geometry the collision stage lists for `state` into `out`, with

@@ -108,6 +108,23 @@ pub enum PositionUpdate {
     Trapezoid,
 }
 
+/// How an island with joints and no contact, limit or motor within reach
+/// of the step advances (issue 48): every other island, and every island
+/// under `Euler`, takes the velocity-level step.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Integrator {
+    /// The velocity-level step (the notes): first order, the joints held
+    /// by their stabilisation.
+    #[default]
+    Euler,
+    /// RATTLE: positions and velocities held on the joints to round-off,
+    /// symplectic, second order.
+    Rattle,
+    /// RATTLE composed to fourth order (Suzuki's five stages).
+    Rattle4,
+}
+
 /// The friction cone of the step.
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "lowercase")]
@@ -161,6 +178,9 @@ pub struct SimDesc {
     /// "euler" (default) or "trapezoid".
     #[serde(default)]
     pub position_update: PositionUpdate,
+    /// "euler" (default), "rattle" or "rattle4": the smooth islands' step.
+    #[serde(default)]
+    pub integrator: Integrator,
     /// `[sim.sleep]`: islands at rest leave the step until touched. On by
     /// default at [`SleepDesc::default`]'s thresholds, as in Rapier, Box2D
     /// and Jolt; `enabled = false` steps every body every step.
