@@ -54,7 +54,7 @@ pub fn run_folder(
     }
     Ok(free)
 }
-pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw,projected,rung,refined,fallback,compliance,energy_refused,islands,largest_island,sleeping,lemke_islands,pgs_islands,max_joint_angle_error,left_out";
+pub const STEPS_HEADER: &str = "step,t,solver,status,pivots,residual,lcp_size,contacts_in_lcp,active_contacts,resolves,regularized,max_penetration,max_joint_error,kinetic,potential,energy,energy_midpoint,t_collision,t_assemble,t_solve,t_integrate,t_measure,t_total,shadow_dv,shadow_dw,projected,rung,refined,fallback,compliance,energy_refused,islands,largest_island,sleeping,lemke_islands,pgs_islands,max_joint_angle_error,left_out,smooth_islands,smooth_left";
 
 /// The CSV files of a run.
 pub struct Writers {
@@ -218,6 +218,8 @@ impl Writers {
             r.pgs_islands.to_string(),
             num(r.max_joint_angle_error),
             r.left_out.to_string(),
+            r.smooth_islands.to_string(),
+            r.smooth_left.to_string(),
         ];
         writeln!(self.steps, "{}", fields.join(","))
     }

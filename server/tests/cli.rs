@@ -467,3 +467,46 @@ max_effort = 2.0
         .unwrap();
     assert!((last - 0.2).abs() < 1e-12, "v = {last}");
 }
+
+/// `integrator = "rattle4"` in a scene: steps.csv counts the island RATTLE
+/// stepped every step (a pendulum swinging clear of the floor, beside a
+/// sphere resting on it, which takes the step) and the summary's joint
+/// error is round-off.
+#[test]
+fn a_rattle_scene_counts_its_smooth_islands() {
+    let dir = TempDir::new("cli-rattle");
+    let scene = dir.path().join("rattle.toml");
+    // GOOD's pinned ball swings 0.3 m below its pin, 0.2 m clear of the
+    // floor; the other sphere rests on the floor.
+    let text = GOOD
+        .replace("dt = 0.001\n", "dt = 0.001\nintegrator = \"rattle4\"\n")
+        .replace("position = [0.0, 0.0, 0.3]", "position = [0.3, 0.0, 0.6]")
+        .replace("position = [0.5, 0.0, 0.3]", "position = [2.0, 0.0, 0.1]");
+    std::fs::write(&scene, text).unwrap();
+    let out_dir = dir.path().join("out");
+    run_ok(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    let steps = std::fs::read_to_string(out_dir.join("steps.csv")).unwrap();
+    let header: Vec<&str> = steps.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    let (smooth, left) = (col("smooth_islands"), col("smooth_left"));
+    let mut rows = 0;
+    for line in steps.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        assert_eq!((f[smooth], f[left]), ("1", "0"), "{line}");
+        rows += 1;
+    }
+    assert_eq!(rows, 50);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("summary.json")).unwrap())
+            .unwrap();
+    assert!(
+        summary["max_joint_error"].as_f64().unwrap() < 1e-12,
+        "{summary}"
+    );
+}

@@ -273,7 +273,6 @@ pub fn deep_penetration(
             }
         }
     }
-    ws.minv.clear();
     let moving_parts = ws.moving.contains(&true);
     set_masses(minv, jointed, moving_parts, ws);
     let parts_drifted = (0..n_bodies).any(|i| jointed[i] && drifted(i) && awake(i));
