@@ -21,6 +21,7 @@
 
 pub mod project;
 pub mod rattle;
+pub mod skyline;
 
 use crate::model::state::State;
 use cosim_shared::PositionUpdate;

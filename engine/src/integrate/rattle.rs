@@ -31,11 +31,11 @@
 //! converge (a step too large for the motion) is left to the velocity-level
 //! step, and the engine counts it.
 
+use super::skyline::Skyline;
 use crate::constraint::applied::{bounded, Inputs, InvMass};
 use crate::constraint::rows::Row;
 use crate::model::state::{BodyState, State};
 use crate::model::{Attachment, Model};
-use crate::solver::mlcp::small;
 use cosim_shared::Integrator;
 use nalgebra::{Matrix3, SymmetricEigen, UnitQuaternion, Vector3};
 
@@ -164,7 +164,8 @@ pub struct Rattle {
     psi0: Vec<f64>,
     rows: Vec<Row>,
     psi: Vec<f64>,
-    chol: Vec<f64>,
+    /// The joint block, factored within its envelope.
+    block: Skyline,
     impulse: Vec<f64>,
     delta: Vec<f64>,
     /// Per body of the model (the island's are read): the substep's start
@@ -187,7 +188,7 @@ pub struct Rattle {
     warm: Vec<f64>,
     /// The Newton iterations of the last [`step`].
     pub iterations: usize,
-    /// `chol` holds the factor of the Delassus matrix at the trial poses
+    /// `block` holds the factor of the Delassus matrix at the trial poses
     /// (the last substep's velocity projection: the next substep's
     /// Jacobian, at the same poses).
     factored: bool,
@@ -324,23 +325,6 @@ fn inverse_masses(model: &Model, island: Island, ws: &mut Rattle) {
     }
 }
 
-/// `G M^-1 G^T` of `rows`, factored into `chol` (column-major).
-fn factor(rows: &[Row], minv: &[InvMass], chol: &mut Vec<f64>) -> Result<(), RattleError> {
-    let nb = rows.len();
-    chol.clear();
-    for l in 0..nb {
-        let weighted = rows[l].weighted(minv);
-        chol.extend(rows.iter().map(|r| r.dot(&weighted)));
-    }
-    small::cholesky(chol, nb).map_err(|row| RattleError::Singular { row })
-}
-
-/// `x <- A^-1 x` for the factor `chol` of `A`.
-fn solve(chol: &[f64], x: &mut [f64]) {
-    small::solve_lower(chol, x.len(), x);
-    small::solve_upper_transposed(chol, x.len(), x);
-}
-
 /// One RATTLE step of `tau` on the trial poses (see the module notes).
 fn substep(
     model: &Model,
@@ -382,7 +366,9 @@ fn substep(
     // Delassus matrix alone: a stage of Suzuki's composition has tau < 0);
     // the last substep's projection factored it at these poses already.
     if !std::mem::take(&mut ws.factored) {
-        factor(&ws.rows0, &ws.minv, &mut ws.chol)?;
+        ws.block
+            .factor(&ws.rows0, &ws.minv)
+            .map_err(|row| RattleError::Singular { row })?;
     }
     // The first guess: this stage's impulses of the last step.
     let rows = model.joint_start[model.joints.len()];
@@ -411,7 +397,7 @@ fn substep(
         }
         ws.delta.clear();
         ws.delta.extend(ws.psi.iter().map(|x| -x / tau));
-        solve(&ws.chol, &mut ws.delta);
+        ws.block.solve(&mut ws.delta);
         for (p, d) in ws.impulse.iter_mut().zip(&ws.delta) {
             *p += d;
         }
@@ -449,11 +435,13 @@ fn substep(
         ws.nu[6 * i..6 * i + 3].copy_from_slice(s.v.as_slice());
         ws.nu[6 * i + 3..6 * i + 6].copy_from_slice(s.w.as_slice());
     }
-    factor(&ws.rows, &ws.minv, &mut ws.chol)?;
+    ws.block
+        .factor(&ws.rows, &ws.minv)
+        .map_err(|row| RattleError::Singular { row })?;
     ws.factored = true;
     ws.delta.clear();
     ws.delta.extend(ws.rows.iter().map(|r| -r.velocity(&ws.nu)));
-    solve(&ws.chol, &mut ws.delta);
+    ws.block.solve(&mut ws.delta);
     for (row, &q) in ws.rows.iter().zip(&ws.delta) {
         row.apply(q, &ws.minv, &mut ws.nu);
     }
