@@ -281,16 +281,35 @@ pub const REFERENCE_SPACING: f64 = 0.01;
 /// The reference scene at step `h` (Lemke, n_d = 8), positions every
 /// `REFERENCE_SPACING`.
 pub fn reference_trajectory(h: f64, nd: usize) -> Result<Trajectory, String> {
-    let setting = Setting::lemke(nd, false);
-    let mut e = engine(model(CaseId::Reference, &setting, h)?.1, &setting);
     let every = (REFERENCE_SPACING / h).round() as u64;
-    let steps = (CaseId::Reference.duration() / h).round() as u64;
+    sampled(
+        CaseId::Reference,
+        h,
+        nd,
+        CaseId::Reference.duration(),
+        every,
+    )
+}
+
+/// Body positions of `case` at time `t` (Lemke, n_d = 8, step `h`).
+fn positions_at(case: CaseId, h: f64, t: f64) -> Result<Vec<[f64; 3]>, String> {
+    let steps = (t / h).round() as u64;
+    let mut samples = sampled(case, h, 8, t, steps)?;
+    Ok(samples.pop().map(|(_, x)| x).unwrap_or_default())
+}
+
+/// `case` run with Lemke (`nd` friction directions, step `h`) for `t`
+/// seconds: the bodies' positions after every `every`-th step.
+fn sampled(case: CaseId, h: f64, nd: usize, t: f64, every: u64) -> Result<Trajectory, String> {
+    let setting = Setting::lemke(nd, false);
+    let mut e = engine(model(case, &setting, h)?.1, &setting);
     let mut out = Vec::new();
-    for _ in 0..steps {
+    for _ in 0..(t / h).round() as u64 {
         let r = e.step();
         if let Some(err) = r.error {
             return Err(format!(
-                "reference run at h = {h:e}: step {}: {err}",
+                "{} reference run at h = {h:e}: step {}: {err}",
+                case.key(),
                 r.step + 1
             ));
         }
@@ -302,23 +321,6 @@ pub fn reference_trajectory(h: f64, nd: usize) -> Result<Trajectory, String> {
         }
     }
     Ok(out)
-}
-
-/// Body positions of `case` at time `t` (Lemke, n_d = 8, step `h`).
-fn positions_at(case: CaseId, h: f64, t: f64) -> Result<Vec<[f64; 3]>, String> {
-    let setting = Setting::lemke(8, false);
-    let mut e = engine(model(case, &setting, h)?.1, &setting);
-    for _ in 0..(t / h).round() as u64 {
-        let r = e.step();
-        if let Some(err) = r.error {
-            return Err(format!(
-                "{} reference at h = {h:e}: step {}: {err}",
-                case.key(),
-                r.step + 1
-            ));
-        }
-    }
-    Ok(e.state().bodies.iter().map(|b| b.x.into()).collect())
 }
 
 /// The converged reference of a case, where it is scored against one, and

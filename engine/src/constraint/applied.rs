@@ -213,24 +213,36 @@ pub fn free_velocity(
     }
     for (joint, effort) in model.joints.iter().zip(&inputs.joint_torque) {
         let p = bounded(joint, state, effort).0 * h;
-        // A slider's effort is a force at B's anchor, on both sides at
-        // that one point (so it has no moment of its own); else a torque.
-        let at = joint
-            .slide
-            .map(|_| crate::model::kinematics::anchor(joint.b, &joint.local_b, state).0);
-        for (att, sign) in [(joint.b, 1.0), (joint.a, -1.0)] {
-            if let Attachment::Body(i) = att {
-                let (dv, dw) = match at {
-                    Some(at) => (
-                        p * (sign * minv[i].inv_m),
-                        minv[i].inv_i * (at - state.bodies[i].x).cross(&(p * sign)),
-                    ),
-                    None => (Vector3::zeros(), minv[i].inv_i * p * sign),
-                };
-                for k in 0..3 {
-                    nu_free[6 * i + k] += dv[k];
-                    nu_free[6 * i + 3 + k] += dw[k];
-                }
+        effort_on(joint, state, p, |i, force, torque| {
+            let (dv, dw) = (force * minv[i].inv_m, minv[i].inv_i * torque);
+            for k in 0..3 {
+                nu_free[6 * i + k] += dv[k];
+                nu_free[6 * i + 3 + k] += dw[k];
+            }
+        });
+    }
+}
+
+/// Where a joint's `effort` (held and bounded; or its impulse over a
+/// step) acts: `on(body, force, torque)` for B and, opposite, for A. A
+/// slider's effort is a force at B's anchor, on both sides at that one
+/// point (so it has no moment of its own), its torque about each body's
+/// centre; any other joint's a torque.
+pub fn effort_on(
+    joint: &Joint,
+    state: &State,
+    effort: Vector3<f64>,
+    mut on: impl FnMut(usize, Vector3<f64>, Vector3<f64>),
+) {
+    let at = joint
+        .slide
+        .map(|_| crate::model::kinematics::anchor(joint.b, &joint.local_b, state).0);
+    for (att, sign) in [(joint.b, 1.0), (joint.a, -1.0)] {
+        if let Attachment::Body(i) = att {
+            let e = effort * sign;
+            match at {
+                Some(at) => on(i, e, (at - state.bodies[i].x).cross(&e)),
+                None => on(i, Vector3::zeros(), e),
             }
         }
     }

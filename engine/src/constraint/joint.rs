@@ -130,6 +130,24 @@ pub fn push_rows(
     }
 }
 
+/// The rows of `joints` and their position errors `psi` (m, or rad on a
+/// turning row: the offsets of [`push_rows`] with no stabilisation factor
+/// and no step), into `rows` and `psi`, cleared first: the position-level
+/// problems' (`integrate::project`, `integrate::rattle`), where
+/// `G^T dx + psi = 0` closes the joints.
+pub fn position_rows<'a>(
+    joints: impl IntoIterator<Item = &'a Joint>,
+    state: &State,
+    rows: &mut Vec<Row>,
+    psi: &mut Vec<f64>,
+) {
+    rows.clear();
+    psi.clear();
+    for joint in joints {
+        push_rows(joint, state, 1.0, 1.0, rows, psi);
+    }
+}
+
 /// The joint's anchor error (m): the distance between its anchors, or
 /// for a slider their distance off its axis.
 pub fn anchor_error(joint: &Joint, state: &State) -> f64 {

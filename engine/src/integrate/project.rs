@@ -56,7 +56,7 @@ use crate::model::islands::Islands;
 use crate::model::state::State;
 use crate::model::Params;
 use crate::model::{Attachment, Counterpart, Joint};
-use crate::solver::mlcp::{small, HELD};
+use crate::solver::mlcp::{small, HELD, JOINT_CFM};
 use crate::solver::pgs::{PgsParams, Stop};
 use crate::solver::{Lcp, Lemke, LemkeError};
 use cosim_shared::SolverChoice;
@@ -149,11 +149,6 @@ const NEWTON_TOLERANCE: f64 = 1e-12;
 /// (whose contacts are linearised) left it deeper than the velocity
 /// stabilisation alone did (1.4 mm against 0.19 mm over 0.3 s).
 pub const JOINTED_SLOP: f64 = 1e-3;
-
-/// The diagonal shift, relative to the joint block's largest diagonal
-/// entry, that makes a singular block (redundant joints) factor, as the
-/// step's `JOINT_CFM` does.
-const JOINT_SHIFT: f64 = 1e-9;
 
 /// Scratch space of the projection (used only when it runs).
 #[derive(Default)]
@@ -401,18 +396,13 @@ fn project(
 /// The rows of the joints on a moving body (`ws.minv` positive) and
 /// their position errors, into `ws.rows` and `ws.q` (cleared first).
 fn push_joint_rows(joints: &[Joint], state: &State, ws: &mut Projection) {
-    ws.rows.clear();
-    ws.q.clear();
     let minv = &ws.minv;
-    for j in joints {
-        let moves = |a: Attachment| match a {
-            Attachment::Body(i) => minv[i].inv_m > 0.0,
-            Attachment::World => false,
-        };
-        if moves(j.a) || moves(j.b) {
-            crate::constraint::joint::push_rows(j, state, 1.0, 1.0, &mut ws.rows, &mut ws.q);
-        }
-    }
+    let moves = |a: Attachment| match a {
+        Attachment::Body(i) => minv[i].inv_m > 0.0,
+        Attachment::World => false,
+    };
+    let moving = joints.iter().filter(|j| moves(j.a) || moves(j.b));
+    crate::constraint::joint::position_rows(moving, state, &mut ws.rows, &mut ws.q);
     ws.joint_rows = ws.rows.len();
 }
 
@@ -455,7 +445,7 @@ fn mixed(lemke: &mut Lemke, ws: &mut Projection) -> Result<(), LemkeError> {
     // Tried on a copy first (`s` is free until the reduced matrix).
     ws.s.clone_from(&ws.chol);
     if small::cholesky(&mut ws.s, nb).is_err() {
-        let shift = JOINT_SHIFT * (0..nb).fold(0.0f64, |a, k| a.max(ws.chol[k * nb + k]));
+        let shift = JOINT_CFM * (0..nb).fold(0.0f64, |a, k| a.max(ws.chol[k * nb + k]));
         for k in 0..nb {
             ws.chol[k * nb + k] += shift;
         }

@@ -32,10 +32,10 @@
 //! step, and the engine counts it.
 
 use super::skyline::Skyline;
-use crate::constraint::applied::{bounded, Inputs, InvMass};
+use crate::constraint::applied::{self, bounded, effort_on, Inputs, InvMass};
 use crate::constraint::rows::Row;
 use crate::model::state::{BodyState, State};
-use crate::model::{Attachment, Model};
+use crate::model::Model;
 use cosim_shared::Integrator;
 use nalgebra::{Matrix3, SymmetricEigen, UnitQuaternion, Vector3};
 
@@ -280,20 +280,10 @@ fn applied(model: &Model, inputs: &Inputs, island: Island, ws: &mut Rattle) {
     for &j in island.joints {
         let joint = &model.joints[j as usize];
         let effort = bounded(joint, trial, &inputs.joint_torque[j as usize]).0;
-        let at = joint
-            .slide
-            .map(|_| crate::model::kinematics::anchor(joint.b, &joint.local_b, trial).0);
-        for (att, sign) in [(joint.b, 1.0), (joint.a, -1.0)] {
-            if let Attachment::Body(i) = att {
-                match at {
-                    Some(at) => {
-                        ws.force[i] += effort * sign;
-                        ws.torque[i] += (at - trial.bodies[i].x).cross(&(effort * sign));
-                    }
-                    None => ws.torque[i] += effort * sign,
-                }
-            }
-        }
+        effort_on(joint, trial, effort, |i, force, torque| {
+            ws.force[i] += force;
+            ws.torque[i] += torque;
+        });
     }
 }
 
@@ -305,24 +295,14 @@ fn joint_rows(
     rows: &mut Vec<Row>,
     psi: &mut Vec<f64>,
 ) {
-    rows.clear();
-    psi.clear();
-    for &j in island.joints {
-        crate::constraint::joint::push_rows(&model.joints[j as usize], trial, 1.0, 1.0, rows, psi);
-    }
+    let joints = island.joints.iter().map(|&j| &model.joints[j as usize]);
+    crate::constraint::joint::position_rows(joints, trial, rows, psi);
 }
 
 /// The island bodies' world inverse masses at the trial poses.
 fn inverse_masses(model: &Model, island: Island, ws: &mut Rattle) {
     let trial = ws.trial.as_ref().expect("set by step");
-    for &i in island.bodies {
-        let (i, b) = (i as usize, &model.bodies[i as usize]);
-        let r = trial.bodies[i].q.to_rotation_matrix();
-        ws.minv[i] = InvMass {
-            inv_m: b.inv_mass,
-            inv_i: r.matrix() * b.inv_inertia * r.matrix().transpose(),
-        };
-    }
+    applied::inverse_masses(model, trial, Some(island.bodies), &mut ws.minv);
 }
 
 /// One RATTLE step of `tau` on the trial poses (see the module notes).

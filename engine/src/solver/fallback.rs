@@ -42,7 +42,7 @@ use crate::solver::{Lemke, LemkeError, SolveInfo};
 /// schedule the same way, verifying every candidate).
 pub const COMPLIANCE: [f64; 5] = [1e-8, 1e-6, 1e-4, 1e-2, 1.0];
 
-/// How much of [`Mlcp::stabilisation_budget`] a rigid answer may use
+/// How much of [`Mlcp::stabilisation_budget_by_island`] a rigid answer may use
 /// before it is refused: the budget counts each row alone, and rows that
 /// share a body need a little more (two contacts of one sphere).
 pub const BUDGET_FACTOR: f64 = 2.0;
@@ -95,8 +95,8 @@ pub struct Scratch {
     z: Vec<f64>,
     offset: Vec<f64>,
     /// Per island: the rigid answer's gain, the stabilisation budget and
-    /// the allowance, the relaxed answer's gain, the offsets' work at its impulses, where it
-    /// ended, and a mask of islands to solve.
+    /// the allowance, the relaxed answer's gain, the offsets' work at its
+    /// impulses, where it ended, and a mask of islands to solve.
     gain: Vec<f64>,
     budget: Vec<f64>,
     allow: Vec<f64>,
@@ -194,7 +194,7 @@ pub fn round_off(step: Step) -> f64 {
 /// h = 1e-2, step 112, had a healthy rigid gain of 1.1e-5 J against a
 /// relaxed loss of 6.1e-5 J and was refused), plus `BUDGET_FACTOR` times
 /// the work its offsets would do at the relaxed impulses
-/// (`Mlcp::offset_work`), plus the allowance. A jointed chain that swings
+/// (`Mlcp::offset_work_by_island`), plus the allowance. A jointed chain that swings
 /// holds its joints with impulses of the relaxed answer's size and passes;
 /// a chain locked against a contact (joint_torques, step 2069: 1.7e5 N s)
 /// needs impulses 1e4 times those of the relaxed answer and fails.
@@ -334,15 +334,8 @@ pub fn solve(
         scratch.rung[g] = rung;
     }
     let unsolved = |r: &[Rung]| r.contains(&Rung::Unsolved);
-    if step.escape && unsolved(&scratch.rung) {
-        // The caller goes on with PGS on the rigid problem.
-        m.rhs(nu_free, contacts, p, Offsets::Full);
-        return Err(first_error.unwrap_or(LemkeError::NumericalBreakdown {
-            pivots: info.work,
-            residual: info.residual,
-        }));
-    }
-    if unsolved(&scratch.rung) {
+    // Under `escape` the caller goes on with PGS at once.
+    if !step.escape && unsolved(&scratch.rung) {
         compliant(lemke, m, &mut info, scratch);
     }
     if unsolved(&scratch.rung) {

@@ -93,23 +93,29 @@ impl Engine {
                 off(i);
             }
         }
+        // Each island's bodies and joints, ascending, in one pass each.
+        let joint_island = |j: usize| groups.island_of_row(model.joint_start[j]) as u32;
+        bucket(
+            groups.len(),
+            (0..model.bodies.len()).map(|i| smooth.island_of[i]),
+            &mut smooth.body_start,
+            &mut smooth.island_bodies,
+        );
+        bucket(
+            groups.len(),
+            (0..model.joints.len()).map(joint_island),
+            &mut smooth.joint_start,
+            &mut smooth.island_joints,
+        );
         for g in 0..groups.len() {
             if !smooth.ok[g] || groups.rows_of(g).is_empty() {
                 continue;
             }
-            smooth.island_bodies.clear();
-            smooth.island_bodies.extend(
-                (0..model.bodies.len() as u32)
-                    .filter(|&i| smooth.island_of[i as usize] == g as u32),
-            );
-            smooth.island_joints.clear();
-            smooth.island_joints.extend(
-                (0..model.joints.len() as u32)
-                    .filter(|&j| groups.island_of_row(model.joint_start[j as usize]) == g),
-            );
+            let span = |start: &[u32]| start[g] as usize..start[g + 1] as usize;
+            let bodies = &smooth.island_bodies[span(&smooth.body_start)];
             let island = rattle::Island {
-                bodies: &smooth.island_bodies,
-                joints: &smooth.island_joints,
+                bodies,
+                joints: &smooth.island_joints[span(&smooth.joint_start)],
             };
             let stepped = rattle::step(
                 model,
@@ -123,7 +129,7 @@ impl Engine {
             match stepped {
                 Ok(()) => {
                     report.smooth_islands += 1;
-                    smooth.bodies.extend_from_slice(&smooth.island_bodies);
+                    smooth.bodies.extend_from_slice(bodies);
                     smooth.states.extend_from_slice(&smooth.out);
                 }
                 Err(e) => {
@@ -167,4 +173,33 @@ impl Engine {
             }
         }
     }
+}
+
+/// Counting sort of the items `0..` by their island (`u32::MAX`: none):
+/// island `g`'s items, ascending, are `items[start[g]..start[g + 1]]`.
+fn bucket(
+    islands: usize,
+    island_of: impl Iterator<Item = u32> + Clone,
+    start: &mut Vec<u32>,
+    items: &mut Vec<u32>,
+) {
+    start.clear();
+    start.resize(islands + 1, 0);
+    for g in island_of.clone().filter(|&g| g != u32::MAX) {
+        start[g as usize + 1] += 1;
+    }
+    for g in 0..islands {
+        start[g + 1] += start[g];
+    }
+    items.clear();
+    items.resize(start[islands] as usize, 0);
+    // Each start serves as its island's cursor, then moves back.
+    for (i, g) in island_of.enumerate().filter(|&(_, g)| g != u32::MAX) {
+        items[start[g as usize] as usize] = i as u32;
+        start[g as usize] += 1;
+    }
+    for g in (1..=islands).rev() {
+        start[g] = start[g - 1];
+    }
+    start[0] = 0;
 }

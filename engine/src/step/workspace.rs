@@ -84,14 +84,17 @@ pub(super) struct Workspace {
 }
 
 /// Scratch of the smooth islands' step: per island whether it takes
-/// RATTLE, each body's island, one island's bodies and joints, and the
-/// bodies stepped with their new states.
+/// RATTLE, each body's island, the bodies and the joints by island
+/// (`island_bodies[body_start[g]..body_start[g + 1]]`, likewise the
+/// joints), and the bodies stepped with their new states.
 #[derive(Default)]
 pub(super) struct Smooth {
     pub(super) ok: Vec<bool>,
     pub(super) island_of: Vec<u32>,
     pub(super) island_bodies: Vec<u32>,
+    pub(super) body_start: Vec<u32>,
     pub(super) island_joints: Vec<u32>,
+    pub(super) joint_start: Vec<u32>,
     pub(super) out: Vec<crate::model::state::BodyState>,
     pub(super) bodies: Vec<u32>,
     pub(super) states: Vec<crate::model::state::BodyState>,

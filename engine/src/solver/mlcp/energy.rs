@@ -8,35 +8,62 @@ use crate::model::Params;
 use crate::solver::island::Groups;
 
 impl Mlcp {
-    /// `K(nu') - K(nu_free)` of the last [`Mlcp::recover`], from the rows
-    /// alone: with `M (nu' - nu_free) = G lambda`,
+    /// `K(nu') - K(nu_free)` of the last [`Mlcp::recover`] island by island
+    /// into `out` (one entry per island of `groups`), from the rows alone:
+    /// with `M (nu' - nu_free) = G lambda`,
     /// `K(nu') - K(nu_free) = 1/2 (nu' + nu_free)^T M (nu' - nu_free)
     ///                     = 1/2 sum_k lambda_k G_k^T (nu' + nu_free)`
     /// over the basis rows (joint impulses `p_b`, contact impulses on the
-    /// basis); no mass matrix needed.
-    pub fn kinetic_change(&self, nu_free: &[f64], nu: &[f64]) -> f64 {
+    /// basis); no mass matrix needed. The rows' terms are summed per island
+    /// in row order, so an island's sum does not depend on the others.
+    pub fn kinetic_change_by_island(
+        &self,
+        groups: &Groups,
+        nu_free: &[f64],
+        nu: &[f64],
+        out: &mut Vec<f64>,
+    ) {
+        out.clear();
+        out.resize(groups.len(), 0.0);
         let nb = self.nb;
-        self.basis
-            .iter()
-            .enumerate()
-            .map(|(k, row)| {
-                let lambda = if k < nb { self.p_b[k] } else { self.zb[k - nb] };
-                if lambda == 0.0 {
-                    0.0
-                } else {
-                    0.5 * lambda * (row.velocity(nu) + row.velocity(nu_free))
-                }
-            })
-            .sum()
+        for (k, row) in self.basis.iter().enumerate() {
+            let lambda = if k < nb { self.p_b[k] } else { self.zb[k - nb] };
+            if lambda != 0.0 {
+                out[self.basis_island(groups, k)] +=
+                    0.5 * lambda * (row.velocity(nu) + row.velocity(nu_free));
+            }
+        }
     }
 
-    /// The kinetic energy the stabilisation may give (J): each row whose
-    /// offset asks for a separation speed `v` (a joint's drift term, a
-    /// penetrating or bouncing contact's negative `a_n`) gets `v^2 / 2`
-    /// over its own Delassus diagonal (its effective inverse mass), the
-    /// energy of that row alone moving at `v` (the diagonal of its own
-    /// row, the same for both solvers); a compliant row also the energy its
-    /// spring holds, `k psi^2 / 2` with `psi = v h / ERP`.
+    /// [`Mlcp::kinetic_change_by_island`] from the iterative solver's
+    /// impulses `lambda` on [`Mlcp::rows`] (joint, normal and friction
+    /// rows).
+    pub fn kinetic_change_rows_by_island(
+        &self,
+        groups: &Groups,
+        lambda: &[f64],
+        nu_free: &[f64],
+        nu: &[f64],
+        out: &mut Vec<f64>,
+    ) {
+        out.clear();
+        out.resize(groups.len(), 0.0);
+        for (k, (row, &l)) in self.rows.iter().zip(lambda).enumerate() {
+            if l != 0.0 {
+                out[self.row_island(groups, k)] +=
+                    0.5 * l * (row.velocity(nu) + row.velocity(nu_free));
+            }
+        }
+    }
+
+    /// The kinetic energy the stabilisation may give (J), island by island
+    /// into `out`: each row whose offset asks for a separation speed `v` (a
+    /// joint's drift term, a penetrating or bouncing contact's negative
+    /// `a_n`) gets `v^2 / 2` over its own Delassus diagonal (its effective
+    /// inverse mass), the energy of that row alone moving at `v` (the
+    /// diagonal of its own row, the same for both solvers); a compliant row
+    /// also the energy its spring holds, `k psi^2 / 2` with
+    /// `psi = v h / ERP`; and the motors' work ([`Mlcp::motor_work`]).
     ///
     /// Why the diagonal: the least energy that meets every row's speed at
     /// once is `1/2 v^T W^-1 v`, unbounded as the rows become dependent. A
@@ -44,18 +71,31 @@ impl Mlcp {
     /// step 2069: impulses of 1.7e5 N s, 0.49 J gained in one step without
     /// input): there the rigid answer is the stabilisation's artefact, not
     /// physics, and `engine::fallback` refuses it.
-    pub fn stabilisation_budget(&self, p: &Params, minv: &[InvMass]) -> f64 {
+    pub fn stabilisation_budget_by_island(
+        &self,
+        p: &Params,
+        minv: &[InvMass],
+        groups: &Groups,
+        out: &mut Vec<f64>,
+    ) {
+        out.clear();
+        out.resize(groups.len(), 0.0);
         let nb = self.nb;
-        let row = |k: usize, spring| self.row_budget(p, minv, k, spring);
-        let joints: f64 = (0..nb).map(|k| row(k, p.joint_compliance)).sum();
-        let contacts: f64 = (nb..nb + self.nc)
-            .filter(|&k| self.offset[k] < 0.0)
-            .map(|k| row(k, p.contact_compliance))
-            .sum();
-        joints + contacts + self.motor_work()
+        for k in 0..nb + self.nc {
+            let (joint, v) = (k < nb, self.offset[k]);
+            if joint || v < 0.0 {
+                let spring = if joint {
+                    p.joint_compliance
+                } else {
+                    p.contact_compliance
+                };
+                out[groups.island_of_row(k)] += self.row_budget(p, minv, k, spring);
+            }
+        }
+        self.add_motor_work(groups, out);
     }
 
-    /// Row `k`'s share of [`Mlcp::stabilisation_budget`].
+    /// Row `k`'s share of [`Mlcp::stabilisation_budget_by_island`].
     fn row_budget(
         &self,
         p: &Params,
@@ -86,28 +126,35 @@ impl Mlcp {
             .sum()
     }
 
-    /// [`Mlcp::kinetic_change`] from the iterative solver's impulses
-    /// `lambda` on [`Mlcp::rows`] (joint, normal and friction rows).
-    pub fn kinetic_change_rows(&self, lambda: &[f64], nu_free: &[f64], nu: &[f64]) -> f64 {
-        self.rows
-            .iter()
-            .zip(lambda)
-            .filter(|(_, &l)| l != 0.0)
-            .map(|(row, &l)| 0.5 * l * (row.velocity(nu) + row.velocity(nu_free)))
-            .sum()
+    /// [`Mlcp::motor_work`] island by island into `out`.
+    pub fn motor_work_by_island(&self, groups: &Groups, out: &mut Vec<f64>) {
+        out.clear();
+        out.resize(groups.len(), 0.0);
+        self.add_motor_work(groups, out);
+    }
+
+    /// Adds each motor's [`Mlcp::motor_work`] to its island's entry.
+    fn add_motor_work(&self, groups: &Groups, out: &mut [f64]) {
+        for (k, (cap, v)) in self.motor_cap.iter().zip(&self.motor_speed).enumerate() {
+            out[groups.island_of_row(self.motor_row[k])] += cap * v.abs();
+        }
     }
 
     /// The work the separation-asking offsets `offset` (a copy of
     /// [`Mlcp::offset`] made with [`Offsets::Full`]) would do at the
-    /// impulses of the last [`Mlcp::recover`]: `sum |lambda_k| |v_k|` over
-    /// joint rows and over normal rows with `a_n < 0` (J).
-    pub fn offset_work(&self, offset: &[f64]) -> f64 {
+    /// impulses of the last [`Mlcp::recover`], island by island into
+    /// `out`: `sum |lambda_k| |v_k|` over joint rows and over normal rows
+    /// with `a_n < 0` (J).
+    pub fn offset_work_by_island(&self, offset: &[f64], groups: &Groups, out: &mut Vec<f64>) {
+        out.clear();
+        out.resize(groups.len(), 0.0);
         let nb = self.nb;
-        let joints: f64 = (0..nb).map(|k| (self.p_b[k] * offset[k]).abs()).sum();
-        let contacts: f64 = (0..self.nc)
-            .map(|i| (self.z[i] * offset[nb + i].min(0.0)).abs())
-            .sum();
-        joints + contacts
+        for k in 0..nb {
+            out[groups.island_of_row(k)] += (self.p_b[k] * offset[k]).abs();
+        }
+        for i in 0..self.nc {
+            out[groups.island_of_row(nb + i)] += (self.z[i] * offset[nb + i].min(0.0)).abs();
+        }
     }
 
     /// The island (of `groups`) of basis row `k` (`[G_b, G_n, G_t1,
@@ -138,95 +185,5 @@ impl Mlcp {
             self.motor_row[k - motors]
         };
         groups.island_of_row(row)
-    }
-
-    /// [`Mlcp::kinetic_change`] island by island into `out` (one entry per
-    /// island of `groups`): the rows' terms summed per island in the same
-    /// order, so an island's sum does not depend on the others.
-    pub fn kinetic_change_by_island(
-        &self,
-        groups: &Groups,
-        nu_free: &[f64],
-        nu: &[f64],
-        out: &mut Vec<f64>,
-    ) {
-        out.clear();
-        out.resize(groups.len(), 0.0);
-        let nb = self.nb;
-        for (k, row) in self.basis.iter().enumerate() {
-            let lambda = if k < nb { self.p_b[k] } else { self.zb[k - nb] };
-            if lambda != 0.0 {
-                out[self.basis_island(groups, k)] +=
-                    0.5 * lambda * (row.velocity(nu) + row.velocity(nu_free));
-            }
-        }
-    }
-
-    /// [`Mlcp::kinetic_change_rows`] island by island into `out`.
-    pub fn kinetic_change_rows_by_island(
-        &self,
-        groups: &Groups,
-        lambda: &[f64],
-        nu_free: &[f64],
-        nu: &[f64],
-        out: &mut Vec<f64>,
-    ) {
-        out.clear();
-        out.resize(groups.len(), 0.0);
-        for (k, (row, &l)) in self.rows.iter().zip(lambda).enumerate() {
-            if l != 0.0 {
-                out[self.row_island(groups, k)] +=
-                    0.5 * l * (row.velocity(nu) + row.velocity(nu_free));
-            }
-        }
-    }
-
-    /// [`Mlcp::stabilisation_budget`] island by island into `out`.
-    pub fn stabilisation_budget_by_island(
-        &self,
-        p: &Params,
-        minv: &[InvMass],
-        groups: &Groups,
-        out: &mut Vec<f64>,
-    ) {
-        out.clear();
-        out.resize(groups.len(), 0.0);
-        let nb = self.nb;
-        for k in 0..nb + self.nc {
-            let (joint, v) = (k < nb, self.offset[k]);
-            if joint || v < 0.0 {
-                let spring = if joint {
-                    p.joint_compliance
-                } else {
-                    p.contact_compliance
-                };
-                out[groups.island_of_row(k)] += self.row_budget(p, minv, k, spring);
-            }
-        }
-        for (k, (cap, v)) in self.motor_cap.iter().zip(&self.motor_speed).enumerate() {
-            out[groups.island_of_row(self.motor_row[k])] += cap * v.abs();
-        }
-    }
-
-    /// [`Mlcp::motor_work`] island by island into `out`.
-    pub fn motor_work_by_island(&self, groups: &Groups, out: &mut Vec<f64>) {
-        out.clear();
-        out.resize(groups.len(), 0.0);
-        for (k, (cap, v)) in self.motor_cap.iter().zip(&self.motor_speed).enumerate() {
-            out[groups.island_of_row(self.motor_row[k])] += cap * v.abs();
-        }
-    }
-
-    /// [`Mlcp::offset_work`] island by island into `out`.
-    pub fn offset_work_by_island(&self, offset: &[f64], groups: &Groups, out: &mut Vec<f64>) {
-        out.clear();
-        out.resize(groups.len(), 0.0);
-        let nb = self.nb;
-        for k in 0..nb {
-            out[groups.island_of_row(k)] += (self.p_b[k] * offset[k]).abs();
-        }
-        for i in 0..self.nc {
-            out[groups.island_of_row(nb + i)] += (self.z[i] * offset[nb + i].min(0.0)).abs();
-        }
     }
 }

@@ -54,7 +54,7 @@ mod schur;
 
 /// Dense Cholesky and triangular solves for small blocks (the joint
 /// block's, and the projection's in `integrate::project`).
-pub use schur::small;
+pub use schur::{small, JOINT_CFM};
 
 use schur::solve_lower;
 
@@ -527,7 +527,7 @@ impl Mlcp {
         let upto = if matrix_free { self.nb } else { r };
         self.weighted.clear();
         // Matrix-free without joints nothing reads them: `recover` and
-        // `kinetic_change` are Lemke's (fallback.rs), the iterative solver
+        // `kinetic_change_by_island` are Lemke's (fallback.rs), the iterative solver
         // weights its own rows (pgs.rs). Measured on the 4,000 pile (10
         // layers, steps 101-200, alternated twice): the assembly's median
         // 2.66 and 2.74 ms against 2.83 and 3.16 ms.

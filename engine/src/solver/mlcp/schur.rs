@@ -17,8 +17,9 @@ use faer::{MatMut, MatRef, Par};
 /// entry means dependent joint rows (redundant joints or a closed loop).
 const SINGULAR_PIVOT: f64 = 1e-12;
 
-/// Relative diagonal shift of a singular joint block (see `reduce_joints`).
-const JOINT_CFM: f64 = 1e-9;
+/// Relative diagonal shift of a singular joint block (see `reduce_joints`;
+/// the projection's joint block takes it too, `integrate::project`).
+pub const JOINT_CFM: f64 = 1e-9;
 
 /// Joint blocks up to this many rows (8 spherical joints) are factored by
 /// the plain loops of [`small`], larger ones by faer's blocked kernels: on
