@@ -306,3 +306,48 @@ fn a_joints_range_is_checked_and_named() {
     let ok = with("prismatic", y, "range = [-5.0, 5.0]");
     cosim_shared::Scene::parse(&(base + &ok), "t.toml").expect("a slider may travel 10 m");
 }
+
+/// A hinge whose upper limit is pi (a URDF's limit beyond pi is held at
+/// pi), the limit soft (`[compliance] contact`, 10 N m/rad, 4 N m s/rad,
+/// past critical for the bob's 0.251 kg m^2): turning at 4 rad/s in zero
+/// gravity it reaches pi after 0.79 s and presses past it, less than the
+/// undamped spring's `sqrt(I w^2 / k) = 0.63` rad. Its angle reads on the circle, (-pi, pi],
+/// so past pi it reads near -pi; the limits take it as past pi
+/// (`limit::nearest_turn`), not a whole turn below the lower limit
+/// (before: it was let through a whole turn). No step falls back, and the
+/// spring sends it back into its range.
+#[test]
+fn a_hinge_presses_past_a_limit_of_pi_and_comes_back() {
+    let (h, steps) = (1e-3, 6000u64);
+    let pi = std::f64::consts::PI;
+    let extra = format!(
+        "range = [-1.0, {pi:e}]\n\n[compliance]\ncontact = {{ stiffness = 10.0, damping = 4.0 }}\n"
+    );
+    let mut e = level_pendulum(h, steps, [0.0; 3], 4.0, &extra);
+    let (mut hit, mut relaxed, mut deepest) = (None, 0u64, 0.0f64);
+    let off = |x: f64| (x - pi + pi).rem_euclid(2.0 * pi) - pi;
+    run(&mut e, steps, |e, r| {
+        let (x, _) = coord(e);
+        relaxed += u64::from(r.fallback.is_some());
+        if hit.is_none() && off(x).abs() < 1e-2 {
+            hit = Some(r.step);
+        }
+        if hit.is_some() {
+            deepest = deepest.max(off(x));
+        }
+    });
+    let hit = hit.expect("the pendulum reached pi");
+    assert!((770..800).contains(&hit), "reached pi at step {hit}");
+    assert_eq!(relaxed, 0, "steps fell back");
+    assert!(
+        (0.1..0.63).contains(&deepest),
+        "pressed {deepest} rad past pi"
+    );
+    // The spring sent it back into its range, turning down (no gravity,
+    // nothing else acts).
+    let (x, v) = coord(&e);
+    assert!(
+        (-1.0..pi).contains(&x) && v < 0.0,
+        "ends at {x} rad, {v} rad/s"
+    );
+}

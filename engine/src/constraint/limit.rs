@@ -32,6 +32,21 @@ use crate::model::Counterpart;
 use crate::model::Model;
 use nalgebra::Vector3;
 
+/// A hinge's angle (in (-pi, pi]) taken a turn up or down where that
+/// puts it nearer its range `[lower, upper]`: the angle is read on the
+/// circle, so one that passed a limit at pi reads near -pi, and without
+/// this the lower limit would see it a whole turn deep (the Panda's
+/// joint 6, its upper limit held at pi, falling past it: a gap of -3.12
+/// rad, every later step refused by the energy check and relaxed).
+fn nearest_turn(x: f64, lower: f64, upper: f64) -> f64 {
+    use std::f64::consts::TAU;
+    let outside = |c: f64| (lower - c).max(c - upper).max(0.0);
+    [x, x + TAU, x - TAU].into_iter().fold(
+        x,
+        |best, c| if outside(c) < outside(best) { c } else { best },
+    )
+}
+
 /// Appends a contact for each side of each limited joint, in joint order
 /// (ascending id).
 pub fn limits(model: &Model, state: &State, out: &mut Vec<Contact>) {
@@ -43,6 +58,11 @@ pub fn limits(model: &Model, state: &State, out: &mut Vec<Contact>) {
             continue;
         };
         let angular = joint.slide.is_none();
+        let x = if angular {
+            nearest_turn(x, lim.lower, lim.upper)
+        } else {
+            x
+        };
         let (pa, ra) = anchor(joint.a, &joint.local_a, state);
         let (pb, rb) = anchor(joint.b, &joint.local_b, state);
         // A's lever arm at B's anchor (the slider's rows'); unused by a
