@@ -155,6 +155,9 @@ fn add(scene: &mut Scene, robot: Scene, name: &str, pose: &Isometry3<f64>) {
         j.axis = j.axis.map(turn);
         j.torque = turn(j.torque);
         j.force = j.force.map(turn);
+        if let Some(m) = &mut j.mimic {
+            m.joint = named(&m.joint);
+        }
         scene.joints.push(j);
     }
 }

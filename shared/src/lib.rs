@@ -34,8 +34,8 @@ pub const IMPULSES_HEADER: &str = "step,t,kind,name,body_a,body_b,px,py,pz";
 
 pub use scene::{
     contact_label, BodyDesc, CameraDesc, FrameEntry, FrictionCone, Integrator, JointDesc,
-    JointKind, PgsDesc, PgsStop, PlacedShape, PlaneDesc, PositionUpdate, RobotDesc, Scene,
-    SceneError, ServoDesc, ShapeDesc, ShapeEntry, SimDesc, SleepDesc, SolverChoice, VisualEntry,
-    VisualKind, DEFAULT_PGS_MAX_ITERATIONS, DEFAULT_PGS_RELATIVE, DEFAULT_PGS_TOLERANCE,
-    MAX_FEATURES, WORLD,
+    JointKind, MimicDesc, PgsDesc, PgsStop, PlacedShape, PlaneDesc, PositionUpdate, RobotDesc,
+    Scene, SceneError, ServoDesc, ShapeDesc, ShapeEntry, SimDesc, SleepDesc, SolverChoice,
+    VisualEntry, VisualKind, DEFAULT_PGS_MAX_ITERATIONS, DEFAULT_PGS_RELATIVE,
+    DEFAULT_PGS_TOLERANCE, MAX_FEATURES, WORLD,
 };

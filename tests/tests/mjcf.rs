@@ -623,3 +623,76 @@ fn a_scene_places_mjcf_models_and_their_keyframes() {
         r.max_joint_error
     );
 }
+
+/// An equality `joint` (MuJoCo's `joint1 = polycoef[0] + polycoef[1]
+/// joint2 + ...`) is the scene's `mimic`: two hinges from the world, `b`
+/// at `0.1 - 2 a`; `b` starts where `a` (at zero) puts it, 0.1 rad (as
+/// MuJoCo's soft equality would pull it; a rigid coupling started off
+/// would have to close it in one step). A quadratic term is left out and
+/// said; one with no second joint (a joint held in place) too. Over 1 s
+/// of gravity the pair moves as one degree of freedom, no step falling
+/// back, `b` within 1e-6 rad of `0.1 - 2 a`.
+#[test]
+fn an_equality_joint_couples_two_hinges() {
+    let text = r#"<mujoco model="gears">
+  <worldbody>
+    <body name="a" pos="0 0 1">
+      <joint name="ja" type="hinge" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02"/>
+    </body>
+    <body name="b" pos="0 1 1">
+      <joint name="jb" type="hinge" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02"/>
+    </body>
+    <body name="c" pos="0 2 1">
+      <joint name="jc" type="hinge" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02"/>
+    </body>
+  </worldbody>
+  <equality>
+    <joint joint1="jb" joint2="ja" polycoef="0.1 -2 0.5 0 0"/>
+    <joint joint1="jc" polycoef="0.2 0 0 0 0"/>
+  </equality>
+</mujoco>"#;
+    let imported = mjcf::import(text, "gears.xml", "gears", None, Options::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let notes = imported.notes.join("\n");
+    assert!(
+        notes.contains("terms past the linear one are left out"),
+        "{notes}"
+    );
+    assert!(notes.contains("no second joint is not modelled"), "{notes}");
+    let jb = imported
+        .scene
+        .joints
+        .iter()
+        .find(|j| j.name == "jb")
+        .expect("jb");
+    let m = jb.mimic.as_ref().expect("jb follows ja");
+    assert_eq!(
+        (m.joint.as_str(), m.multiplier, m.offset),
+        ("ja", -2.0, 0.1)
+    );
+    let mut e =
+        cosim_server::engine::Engine::new(cosim_server::engine::Model::from_scene(&imported.scene));
+    let q = |e: &cosim_server::engine::Engine, name: &str| {
+        let j = e
+            .model()
+            .joints
+            .iter()
+            .find(|j| j.name == name)
+            .expect(name);
+        cosim_server::engine::constraint::joint::coordinate(j, e.state())
+            .expect("a hinge")
+            .0
+    };
+    let mut worst = 0.0f64;
+    for n in 1..=1000 {
+        let r = e.step();
+        assert!(r.ok(), "step {n}");
+        assert!(r.fallback.is_none(), "step {n} fell back");
+        worst = worst.max((q(&e, "jb") - (0.1 - 2.0 * q(&e, "ja"))).abs());
+    }
+    assert!(worst < 1e-6, "jb left 0.1 - 2 ja by {worst} rad");
+    assert!(q(&e, "ja").abs() > 0.1, "ja did not move: {}", q(&e, "ja"));
+}

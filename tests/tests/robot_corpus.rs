@@ -358,3 +358,82 @@ fn the_panda_grasps_and_lifts_a_box_without_slip() {
     assert!(rise > 0.03, "the box rose {rise} m");
     assert!(slip < 1e-3, "the box slipped {slip} m in the fingers");
 }
+
+/// The Panda's `<mimic>`: `panda_finger_joint2` follows
+/// `panda_finger_joint1` (multiplier 1). Fixed base, passive joints, the
+/// arm falling from home under gravity for 2 s with each solver: the
+/// follower starts where its leader does (0.02 m, given for the leader
+/// alone) and stays within 1e-6 m of it every step, both fingers on their
+/// [0, 0.04] m limits' rows as the arm swings.
+#[test]
+fn the_pandas_fingers_move_as_one() {
+    let panda = robots().join("panda_description/urdf/panda.urdf");
+    let text = format!(
+        "[sim]\ndt = 0.001\nduration = 2.0\n\n[[robot]]\nfile = {:?}\nname = \"panda\"\nfixed_base = true\njoints = {{ panda_joint4 = -2.356, panda_joint6 = 1.571, panda_finger_joint1 = 0.02 }}\n",
+        panda.display().to_string()
+    );
+    let scene = cosim_shared::Scene::read(&text, "panda.toml").unwrap_or_else(|e| panic!("{e}"));
+    let placed =
+        cosim_import::scene::place(scene, None, "panda.toml").unwrap_or_else(|e| panic!("{e}"));
+    let follower = placed
+        .scene
+        .joints
+        .iter()
+        .find(|j| j.name == "panda/panda_finger_joint2")
+        .expect("the second finger");
+    let mimic = follower.mimic.as_ref().expect("its <mimic>");
+    assert_eq!(
+        (mimic.joint.as_str(), mimic.multiplier),
+        ("panda/panda_finger_joint1", 1.0)
+    );
+    for solver in [SolverChoice::Lemke, SolverChoice::Pgs, SolverChoice::Auto] {
+        let mut model = Model::from_scene(&placed.scene);
+        model.params.solver = solver;
+        let mut e = Engine::new(model);
+        let finger = |e: &Engine, k: usize| {
+            let name = format!("panda/panda_finger_joint{k}");
+            let j = e
+                .model()
+                .joints
+                .iter()
+                .find(|j| j.name == name)
+                .expect("a finger");
+            cosim_server::engine::constraint::joint::coordinate(j, e.state())
+                .expect("a slider")
+                .0
+        };
+        for k in [1, 2] {
+            assert!((finger(&e, k) - 0.02).abs() < 1e-12, "finger {k}");
+        }
+        let (mut apart, mut travel, mut joint_error) = (0.0f64, 0.0f64, 0.0f64);
+        for n in 1..=2000 {
+            let r = e.step();
+            assert!(r.ok(), "{}: step {n}: {:?}", solver.as_str(), r.error);
+            let d = (finger(&e, 2) - finger(&e, 1)).abs();
+            joint_error = joint_error.max(r.max_joint_error);
+            apart = apart.max(d);
+            travel = travel.max((finger(&e, 1) - 0.02).abs());
+        }
+        eprintln!(
+            "{}: fingers apart by {apart:.2e} m at most, finger 1 moved {travel:.2e} m, joint error {joint_error:.2e} m",
+            solver.as_str()
+        );
+        // The coupling's error is a position error of the first-order
+        // step like a joint's: held to the corpus' joint bound.
+        assert!(
+            apart < 1e-5,
+            "{}: the fingers parted by {apart} m",
+            solver.as_str()
+        );
+        assert!(
+            joint_error < 1e-4,
+            "{}: joint error {joint_error} m",
+            solver.as_str()
+        );
+        assert!(
+            travel > 1e-3,
+            "{}: the fingers did not move",
+            solver.as_str()
+        );
+    }
+}

@@ -6,6 +6,7 @@
 
 pub mod applied;
 pub mod contact;
+pub mod coupling;
 pub mod joint;
 pub mod limit;
 pub mod motor;

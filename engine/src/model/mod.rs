@@ -290,6 +290,16 @@ pub struct Joint {
     pub motor: Option<Motor>,
 }
 
+/// `q_follower = ratio q_leader + offset` (a URDF `<mimic>`, an MJCF
+/// `<equality><joint>`): two hinges' or sliders' coordinates tied.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coupling {
+    pub follower: usize,
+    pub leader: usize,
+    pub ratio: f64,
+    pub offset: f64,
+}
+
 /// A joint motor: the coordinate's rate driven to `speed` (the scene's;
 /// a controller's `Engine::set_motor_speed` holds another) by an effort of
 /// at most `max_effort` (N m or N), rigidly or through `gains`; for a
@@ -470,6 +480,9 @@ pub struct Model {
     /// The joints with a motor, ascending: motor `k` is joint
     /// `motors[k]`'s (its row follows the joint block's, `motor.rs`).
     pub motors: Vec<usize>,
+    /// Joints whose coordinate follows another's (`constraint::coupling`):
+    /// one row each, after every joint's rows in the joint block.
+    pub couplings: Vec<Coupling>,
     pub params: Params,
     pub initial: Vec<InitialBody>,
     /// Contact ids per pair of bodies: per pair of their shapes 1 in a
@@ -736,6 +749,22 @@ impl Model {
             },
             jointed,
             motors: joints_with_motors,
+            couplings: scene
+                .joints
+                .iter()
+                .enumerate()
+                .filter_map(|(follower, j)| {
+                    let m = j.mimic.as_ref()?;
+                    // Validated: the leader exists.
+                    let leader = scene.joints.iter().position(|l| l.name == m.joint)?;
+                    Some(Coupling {
+                        follower,
+                        leader,
+                        ratio: m.multiplier,
+                        offset: m.offset,
+                    })
+                })
+                .collect(),
             params: Params {
                 h: s.dt,
                 gravity: v3(s.gravity),
@@ -895,6 +924,11 @@ impl Model {
 }
 
 impl Model {
+    /// Rows of the joint block: every joint's, then one per coupling.
+    pub fn joint_rows(&self) -> usize {
+        self.joint_start[self.joints.len()] + self.couplings.len()
+    }
+
     /// The name of one side of an impulse, as the outputs write it.
     pub fn party_name(&self, p: Party) -> &str {
         match p {

@@ -141,7 +141,7 @@ impl State {
                 })
                 .collect(),
             warm_contacts: Vec::new(),
-            warm_joint: vec![0.0; model.joint_start[model.joints.len()] + model.motors.len()],
+            warm_joint: vec![0.0; model.joint_rows() + model.motors.len()],
             warm_lcp: Vec::new(),
             warm_active: Vec::new(),
             rest: vec![0; model.bodies.len()],

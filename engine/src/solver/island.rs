@@ -13,6 +13,7 @@
 //!
 //! The partition itself is `model::islands`' union-find.
 
+use crate::constraint::coupling::Tails;
 use crate::constraint::rows::Row;
 use crate::model::islands::{Islands, Summary};
 use crate::model::Counterpart;
@@ -54,16 +55,32 @@ impl Groups {
 
 /// Sorts `rows` (the joint and normal rows of the step's problem) by
 /// island into `out`: two rows are in one island when a chain of rows
-/// links their bodies. A row on no body (a joint of the world to
-/// itself) is an island of its own. Returns the partition's summary
-/// (bodies tied by the rows; [`Islands::partition`] of their links).
-pub fn group(partition: &mut Islands, bodies: usize, rows: &[Row], out: &mut Groups) -> Summary {
+/// links their bodies; a coupling's row (with a tail in `tails`) links
+/// its head's bodies to its tail's. A row on no body (a joint of the
+/// world to itself) is an island of its own. Returns the partition's
+/// summary (bodies tied by the rows; [`Islands::partition`] of their
+/// links).
+pub fn group(
+    partition: &mut Islands,
+    bodies: usize,
+    rows: &[Row],
+    tails: Tails,
+    out: &mut Groups,
+) -> Summary {
     // A row on one body ties it to something static, as a plane does.
-    let links = rows.iter().filter_map(|row| match (row.a, row.b) {
+    let link = |row: &Row| match (row.a, row.b) {
         (Some(a), Some(b)) => Some((a.body, Counterpart::Body(b.body))),
         (Some(j), None) | (None, Some(j)) => Some((j.body, Counterpart::World)),
         (None, None) => None,
-    });
+    };
+    let heads = &rows[tails.first.min(rows.len())..];
+    let couplings = crate::constraint::coupling::links(tails.rows, heads)
+        .map(|(a, b)| (a, Counterpart::Body(b)));
+    let links = rows
+        .iter()
+        .filter_map(link)
+        .chain(tails.rows.iter().filter_map(link))
+        .chain(couplings);
     let summary = partition.partition(bodies, links);
     out.of_root.clear();
     out.of_root.resize(bodies, u32::MAX);
@@ -134,7 +151,7 @@ mod tests {
             Row::along(x, None, None),
         ];
         let mut groups = Groups::default();
-        let s = group(&mut islands, 4, &rows, &mut groups);
+        let s = group(&mut islands, 4, &rows, Tails::NONE, &mut groups);
         assert_eq!(
             s,
             Summary {
@@ -146,7 +163,7 @@ mod tests {
         assert_eq!(groups.rows_of(0), [0, 1, 2]);
         assert_eq!(groups.rows_of(1), [3]);
         assert_eq!(groups.rows_of(2), [4]);
-        group(&mut islands, 4, &[], &mut groups);
+        group(&mut islands, 4, &[], Tails::NONE, &mut groups);
         assert!(groups.is_empty());
     }
 }

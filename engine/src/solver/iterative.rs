@@ -494,6 +494,10 @@ fn run(
     }
     let problem = PgsProblem {
         rows: &m.rows,
+        tails: crate::constraint::coupling::Tails {
+            first: m.nb - m.ng,
+            rows: &m.tails,
+        },
         offset,
         cfm: &m.cfm,
         nb: m.nb,

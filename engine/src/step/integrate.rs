@@ -70,6 +70,10 @@ impl Engine {
         for &j in &model.motors {
             smooth.ok[groups.island_of_row(model.joint_start[j])] = false;
         }
+        // RATTLE holds the joints, not the couplings.
+        for k in nb - ws.mlcp.ng..nb {
+            smooth.ok[groups.island_of_row(k)] = false;
+        }
         smooth.island_of.clear();
         smooth.island_of.resize(model.bodies.len(), u32::MAX);
         for (k, row) in ws.mlcp.rows[..nb].iter().enumerate() {

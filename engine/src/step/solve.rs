@@ -74,6 +74,7 @@ impl Engine {
                     &mut ws.islands,
                     model.bodies.len(),
                     &m.rows[..m.nb + m.nc],
+                    m.tails(),
                     &mut ws.groups,
                 );
                 let step = fallback::Step {

@@ -30,10 +30,12 @@
 //!   friction where nothing else does (one drive per joint: what is left
 //!   out is said);
 //! - `<contact><exclude>` of two jointed bodies, equality `connect`
-//!   (spherical joint) and `weld` (fixed joint).
+//!   (spherical joint), `weld` (fixed joint) and `joint` (its linear part:
+//!   the scene's `mimic`).
 //!
-//! Left out and said: tendons and what acts on them, equality `joint`,
-//! armature, heightfields, activation dynamics.
+//! Left out and said: tendons and what acts on them, armature,
+//! heightfields, activation dynamics, an equality `joint`'s terms past
+//! the linear one.
 
 mod defaults;
 mod frame;
@@ -658,6 +660,7 @@ impl Builder<'_> {
         }
         self.drives(&mut scene, &names);
         self.equalities(&mut scene, &placed, &group_body, &top);
+        self.joint_equalities(&mut scene, &names);
         self.excludes(&mut scene, &group_body, &top);
         Some(scene)
     }
@@ -726,6 +729,7 @@ impl Builder<'_> {
             limit_restitution: None,
             motor: None,
             max_effort: None,
+            mimic: None,
         })
     }
 
@@ -1088,6 +1092,7 @@ impl Builder<'_> {
                     anchor,
                 } => (body1, body2, Kind::Spherical, Some(*anchor)),
                 read::Equality::Weld { body1, body2 } => (body1, body2, Kind::Fixed, None),
+                read::Equality::Joint { .. } => continue,
                 read::Equality::Other(label) => {
                     self.notes
                         .push(format!("{label}: this equality is not modelled; left out"));
@@ -1125,6 +1130,96 @@ impl Builder<'_> {
                 limit_restitution: None,
                 motor: None,
                 max_effort: None,
+                mimic: None,
+            });
+        }
+    }
+
+    /// Equality `joint`s: the first joint's coordinate follows the
+    /// second's, `q1 = c0 + c1 q2` (the scene's `mimic`). A polynomial's
+    /// higher terms are left out and said; so is a coupling to no second
+    /// joint (`q1 = c0`, a joint held in place) and one of a joint with
+    /// no coordinate.
+    fn joint_equalities(&mut self, scene: &mut Scene, names: &[String]) {
+        let m = self.m;
+        let joints: Vec<&read::Joint> = m.bodies.iter().flat_map(|b| &b.joints).collect();
+        for e in &m.equalities {
+            let read::Equality::Joint {
+                joint1,
+                joint2,
+                polycoef: c,
+                label,
+            } = e
+            else {
+                continue;
+            };
+            let Some(joint2) = joint2 else {
+                self.notes.push(format!(
+                    "{label}: a joint held at {} with no second joint is not modelled; left out",
+                    c[0]
+                ));
+                continue;
+            };
+            let scene_name = |name: &str| {
+                joints
+                    .iter()
+                    .position(|j| j.name == name)
+                    .map(|k| names[k].clone())
+            };
+            let (Some(n1), Some(n2)) = (scene_name(joint1), scene_name(joint2)) else {
+                self.notes.push(format!(
+                    "{label}: joint {joint1:?} or {joint2:?} is not in the file; left out"
+                ));
+                continue;
+            };
+            let axial = |s: &Scene, n: &str| {
+                s.joints
+                    .iter()
+                    .position(|j| j.name == n && matches!(j.kind, Kind::Revolute | Kind::Prismatic))
+            };
+            let (Some(f), Some(_)) = (axial(scene, &n1), axial(scene, &n2)) else {
+                self.notes.push(format!(
+                    "{label}: couples a joint with no coordinate (free or ball); left out"
+                ));
+                continue;
+            };
+            if c[2..].iter().any(|&x| x != 0.0) {
+                self.notes.push(format!(
+                    "{label}: its polycoef's terms past the linear one are left out"
+                ));
+            }
+            // The follower starts where its leader puts it (MuJoCo's soft
+            // equality pulls it there; a rigid one started off would have
+            // to close the gap in one step); where its range forbids it,
+            // the coupling cannot hold and is left out.
+            let leader = scene.joints.iter().find(|j| j.name == n2);
+            let q = c[0] + c[1] * leader.and_then(|j| j.position).unwrap_or(0.0);
+            let follower = &scene.joints[f];
+            let (lo, hi) = follower.range.map_or(
+                if follower.kind == Kind::Revolute {
+                    (-std::f64::consts::PI, std::f64::consts::PI)
+                } else {
+                    (f64::NEG_INFINITY, f64::INFINITY)
+                },
+                |[lo, hi]| (lo, hi),
+            );
+            if !(lo..=hi).contains(&q) {
+                self.notes.push(format!(
+                    "{label}: puts joint {joint1:?} at {q}, outside its range [{lo}, {hi}]; left out"
+                ));
+                continue;
+            }
+            if scene.joints[f].mimic.is_some() {
+                self.notes.push(format!(
+                    "{label}: joint {joint1:?} follows another joint already; left out"
+                ));
+                continue;
+            }
+            scene.joints[f].position = Some(q).filter(|q| *q != 0.0);
+            scene.joints[f].mimic = Some(cosim_shared::MimicDesc {
+                joint: n2,
+                multiplier: c[1],
+                offset: c[0],
             });
         }
     }
@@ -1233,6 +1328,7 @@ fn fixed(name: &str, a: &str, b: &str, at: Vector3<f64>) -> JointDesc {
         limit_restitution: None,
         motor: None,
         max_effort: None,
+        mimic: None,
     }
 }
 

@@ -180,6 +180,14 @@ pub enum Equality {
         body1: String,
         body2: String,
     },
+    /// `joint1 = polycoef[0] + polycoef[1] joint2 + ...` (joint2 absent:
+    /// `joint1 = polycoef[0]`).
+    Joint {
+        joint1: String,
+        joint2: Option<String>,
+        polycoef: [f64; 5],
+        label: String,
+    },
     /// Anything else (joint couplings, tendons, sites), named.
     Other(String),
 }
@@ -309,6 +317,18 @@ pub fn model(tree: &Tree, problems: &mut Problems) -> Model {
                     body1: a.into(),
                     body2: b.unwrap_or("world").into(),
                 },
+                ("joint", _, _) if el.attr("joint1").is_some() => {
+                    let cls = r.class(el, "main");
+                    let c = r
+                        .prefix(el, &cls, "polycoef", &[0.0, 1.0, 0.0, 0.0, 0.0])
+                        .unwrap_or(vec![0.0, 1.0, 0.0, 0.0, 0.0]);
+                    Equality::Joint {
+                        joint1: el.attr("joint1").unwrap_or_default().into(),
+                        joint2: el.attr("joint2").map(Into::into),
+                        polycoef: [c[0], c[1], c[2], c[3], c[4]],
+                        label: tree.label(el),
+                    }
+                }
                 _ => Equality::Other(tree.label(el)),
             };
             m.equalities.push(eq);

@@ -30,8 +30,8 @@
 //! - no floor unless the options ask for one, then under the robot's
 //!   lowest point.
 //!
-//! Not modelled yet, and said when a file has them:
-//! `<mimic>` (the joint moves on its own). Cylinders are cylinders
+//! `<mimic>` is the scene's `mimic` (`constraint::coupling`), the follower
+//! started where its leader puts it. Cylinders are cylinders
 //! (`collision/cylinder.rs`); meshes their convex hulls, a mesh that
 //! cannot be found or read a problem, with the file it resolves to.
 
@@ -606,11 +606,36 @@ impl Tree {
                     j.name
                 ));
             }
-            if let Some((m, _, _)) = &j.mimic {
-                notes.push(format!(
-                    "joint {:?}: <mimic joint={m:?}> is not modelled yet: it moves on its own",
-                    j.name
-                ));
+            if let Some((m, multiplier, offset)) = &j.mimic {
+                let leader = robot.joints.iter().position(|l| &l.name == m);
+                let put = leader.map(|l| multiplier * self.start[l] + offset);
+                match leader.map(|l| &robot.joints[l]) {
+                    Some(l) if hinge_or_slider && moves(l) && l.name != j.name && put != Some(q) => {
+                        notes.push(format!(
+                            "joint {:?}: <mimic joint={m:?}> puts it at {}, but it starts at {q} (its limits, or a position given): it moves on its own",
+                            j.name,
+                            put.unwrap_or(q)
+                        ));
+                    }
+                    Some(l) if hinge_or_slider && moves(l) && l.name != j.name => {
+                        // The leader's name as written above (renamed
+                        // where it is a link's).
+                        let leader =
+                            if body_name.contains(&l.name) || links.iter().any(|k| k.name == l.name) {
+                                format!("{}_joint", l.name)
+                            } else {
+                                l.name.clone()
+                            };
+                        let _ = writeln!(
+                            s,
+                            "mimic = {{ joint = {leader:?}, multiplier = {multiplier:?}, offset = {offset:?} }}"
+                        );
+                    }
+                    _ => notes.push(format!(
+                        "joint {:?}: <mimic joint={m:?}> names no other hinge or slider: it moves on its own",
+                        j.name
+                    )),
+                }
             }
             s.push('\n');
         }
@@ -658,7 +683,7 @@ fn starts(
             );
         }
     }
-    robot
+    let mut start: Vec<f64> = robot
         .joints
         .iter()
         .map(|j| {
@@ -702,7 +727,27 @@ fn starts(
                 _ => q,
             }
         })
-        .collect()
+        .collect();
+    // A follower not given a position starts where its leader puts it
+    // (`q = multiplier q_leader + offset`) when that lies within its
+    // limits; else its coupling pulls it there over the first steps.
+    for (k, j) in robot.joints.iter().enumerate() {
+        let Some((m, multiplier, offset)) = &j.mimic else {
+            continue;
+        };
+        let leader = robot.joints.iter().position(|l| &l.name == m);
+        if let (Some(l), false) = (leader, positions.contains_key(&j.name)) {
+            let q = multiplier * start[l] + offset;
+            let (lo, hi) = range_of(j).unwrap_or(match j.kind {
+                JointType::Prismatic => (f64::NEG_INFINITY, f64::INFINITY),
+                _ => (-std::f64::consts::PI, std::f64::consts::PI),
+            });
+            if moves(j) && (lo..=hi).contains(&q) {
+                start[k] = q;
+            }
+        }
+    }
+    start
 }
 
 /// Whether a joint has a coordinate (a hinge or a slider).

@@ -87,6 +87,31 @@ pub struct JointDesc {
     /// bound.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_effort: Option<f64>,
+    /// `revolute` and `prismatic` only: this joint's coordinate follows
+    /// another's, `q = multiplier q_leader + offset` (a URDF `<mimic>`,
+    /// an MJCF `<equality><joint>` with a linear `polycoef`), held by one
+    /// bilateral row across the two joints' bodies, so that the follower
+    /// pushes back on the leader as a gear train does.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mimic: Option<MimicDesc>,
+}
+
+/// A coupling of a joint's coordinate to another's (`JointDesc::mimic`).
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MimicDesc {
+    /// The leader: a revolute or prismatic joint's name (not this one).
+    pub joint: String,
+    /// Default 1 (URDF's).
+    #[serde(default = "one")]
+    pub multiplier: f64,
+    /// Rad or m, the follower's units; default 0.
+    #[serde(default)]
+    pub offset: f64,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// A joint motor with an effort of at most `max_effort`, one bounded row

@@ -400,6 +400,81 @@ impl Scene {
                 (_, Some(_)) => axial_only("axis", "an axis")?,
                 (_, None) => {}
             }
+            if let Some(m) = &j.mimic {
+                axial_only("mimic", "a coordinate to couple")?;
+                let leader = self.joints.iter().find(|l| l.name == m.joint);
+                match leader {
+                    None => {
+                        return Err(err(
+                            f("mimic.joint"),
+                            format!("= {:?}: no joint of that name", m.joint),
+                        ))
+                    }
+                    Some(l) if l.name == j.name => {
+                        return Err(err(f("mimic.joint"), "a joint cannot follow itself".into()))
+                    }
+                    Some(l) if !matches!(l.kind, JointKind::Revolute | JointKind::Prismatic) => {
+                        return Err(err(
+                            f("mimic.joint"),
+                            format!(
+                                "= {:?}: a {} joint has no coordinate to follow",
+                                m.joint,
+                                l.kind.as_str()
+                            ),
+                        ))
+                    }
+                    Some(_) => {}
+                }
+                for (key, x) in [("multiplier", m.multiplier), ("offset", m.offset)] {
+                    if !x.is_finite() {
+                        return Err(err(
+                            f(&format!("mimic.{key}")),
+                            format!("= {x}: must be finite"),
+                        ));
+                    }
+                }
+                // It starts where its leader puts it: a rigid coupling
+                // started off would close the gap in one step, with the
+                // energy of that speed (the importers place followers so).
+                let lead = leader.and_then(|l| l.position).unwrap_or(0.0);
+                let (want, at) = (m.multiplier * lead + m.offset, j.position.unwrap_or(0.0));
+                let mut off = at - want;
+                if j.kind == JointKind::Revolute {
+                    use std::f64::consts::{PI, TAU};
+                    off = (off + PI).rem_euclid(TAU) - PI;
+                }
+                if off.abs() > 1e-9 * want.abs().max(1.0) {
+                    return Err(err(
+                        f("position"),
+                        format!(
+                            "= {at}: it follows {:?} (at {lead}), which puts it at {want}: start it there",
+                            m.joint
+                        ),
+                    ));
+                }
+                // A loop of followers would tie a coordinate to itself.
+                let mut at = m.joint.as_str();
+                for _ in 0..self.joints.len() {
+                    let Some(next) = self
+                        .joints
+                        .iter()
+                        .find(|l| l.name == at)
+                        .and_then(|l| l.mimic.as_ref())
+                    else {
+                        break;
+                    };
+                    if next.joint == j.name {
+                        return Err(err(
+                            f("mimic.joint"),
+                            format!(
+                                "= {:?}: the followers form a loop back to this joint",
+                                m.joint
+                            ),
+                        ));
+                    }
+                    at = &next.joint;
+                }
+            }
         }
         if let Some(c) = &self.compliance {
             for (what, spring) in [("contact", c.contact), ("joint", c.joint)] {

@@ -25,12 +25,12 @@ impl Mlcp {
     ) {
         out.clear();
         out.resize(groups.len(), 0.0);
-        let nb = self.nb;
+        let (nb, tails) = (self.nb, self.tails());
         for (k, row) in self.basis.iter().enumerate() {
             let lambda = if k < nb { self.p_b[k] } else { self.zb[k - nb] };
             if lambda != 0.0 {
                 out[self.basis_island(groups, k)] +=
-                    0.5 * lambda * (row.velocity(nu) + row.velocity(nu_free));
+                    0.5 * lambda * (tails.velocity(k, row, nu) + tails.velocity(k, row, nu_free));
             }
         }
     }
@@ -48,10 +48,11 @@ impl Mlcp {
     ) {
         out.clear();
         out.resize(groups.len(), 0.0);
+        let tails = self.tails();
         for (k, (row, &l)) in self.rows.iter().zip(lambda).enumerate() {
             if l != 0.0 {
                 out[self.row_island(groups, k)] +=
-                    0.5 * l * (row.velocity(nu) + row.velocity(nu_free));
+                    0.5 * l * (tails.velocity(k, row, nu) + tails.velocity(k, row, nu_free));
             }
         }
     }
@@ -104,7 +105,7 @@ impl Mlcp {
         spring: Option<crate::model::Compliance>,
     ) -> f64 {
         let v = self.offset[k];
-        let d = self.rows[k].coupling(&self.rows[k], minv) + self.cfm[k];
+        let d = self.tails().diagonal(k, &self.rows[k], minv) + self.cfm[k];
         let kinetic = if d > 0.0 { 0.5 * v * v / d } else { 0.0 };
         let stored = spring.map_or(0.0, |k| {
             let psi = v * p.h / k.erp(p.h);

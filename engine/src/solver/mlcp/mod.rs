@@ -60,6 +60,7 @@ use schur::solve_lower;
 
 use crate::constraint::applied::InvMass;
 use crate::constraint::contact::Contact;
+use crate::constraint::coupling::Tails;
 use crate::constraint::rows::Row;
 use crate::model::state::State;
 use crate::model::{Model, Params};
@@ -191,8 +192,13 @@ pub struct Mlcp {
     /// solver, see [`Mlcp::add_friction_rows`]) friction rows and the
     /// motors' rows.
     pub rows: Vec<Row>,
-    /// Joint rows.
+    /// Joint rows: every joint's, then one per coupling (the last `ng`),
+    /// whose tails are `tails` (`constraint::coupling`).
     pub nb: usize,
+    pub ng: usize,
+    pub tails: Vec<Row>,
+    /// `M^-1` times each tail ([`Row::weighted`]).
+    tails_weighted: Vec<Row>,
     /// Contacts in the LCP, and how many of them have friction.
     pub nc: usize,
     pub nf: usize,
@@ -462,7 +468,20 @@ impl Mlcp {
                 &mut self.offset,
             );
         }
+        // Couplings last: their heads are joint rows, their tails beside.
+        self.tails.clear();
+        for c in &model.couplings {
+            let (head, tail, offset) =
+                crate::constraint::coupling::rows(c, &model.joints, state, factor, p.h);
+            self.rows.push(head);
+            self.tails.push(tail);
+            self.offset.push(offset);
+        }
+        self.ng = self.tails.len();
         self.nb = self.rows.len();
+        self.tails_weighted.clear();
+        self.tails_weighted
+            .extend(self.tails.iter().map(|row| row.weighted(minv)));
 
         // Normal rows, then friction rows where mu > 0.
         for (ci, c) in contacts.iter().enumerate().filter(|(_, c)| c.in_lcp) {
@@ -546,6 +565,16 @@ impl Mlcp {
                 }
             }
         }
+        // A coupling's row and column again, with its tail on either side.
+        for k in self.nb - self.ng..self.nb {
+            for l in 0..r {
+                let v = self.wide_dot(k, l);
+                self.w[k * r + l] = v;
+                if l < upto {
+                    self.w[l * r + k] = v;
+                }
+            }
+        }
 
         self.fill_coeffs();
         self.reduce_joints()?;
@@ -574,8 +603,12 @@ impl Mlcp {
     pub fn rhs(&mut self, nu_free: &[f64], contacts: &[Contact], p: &Params, offsets: Offsets) {
         let nb = self.nb;
         self.b.clear();
+        let tails = Tails {
+            first: nb - self.ng,
+            rows: &self.tails,
+        };
         for (k, row) in self.basis.iter().enumerate() {
-            let v = row.velocity(nu_free);
+            let v = tails.velocity(k, row, nu_free);
             let drift = k < nb && !self.relaxes(offsets, k);
             self.b.push(if drift { v + self.offset[k] } else { v });
         }
@@ -583,6 +616,48 @@ impl Mlcp {
         self.yb.extend_from_slice(&self.b[..nb]);
         solve_lower(&self.chol, nb, &mut self.yb);
         self.form_rhs(contacts, p, offsets);
+    }
+
+    /// The couplings' tails (`constraint::coupling`).
+    pub fn tails(&self) -> Tails<'_> {
+        Tails {
+            first: self.nb - self.ng,
+            rows: &self.tails,
+        }
+    }
+
+    /// The Delassus entry of basis rows `k` and `l`, each with its tail
+    /// if it has one: `(B_k + T_k)^T M^-1 (B_l + T_l)`.
+    fn wide_dot(&self, k: usize, l: usize) -> f64 {
+        let (tails, weighted) = (
+            self.tails(),
+            Tails {
+                first: self.nb - self.ng,
+                rows: &self.tails_weighted,
+            },
+        );
+        let (bk, wl) = (&self.basis[k], &self.weighted[l]);
+        let mut v = bk.dot(wl);
+        if let Some(t) = tails.get(k) {
+            v += t.dot(wl);
+        }
+        if let Some(tw) = weighted.get(l) {
+            v += bk.dot(tw);
+            if let Some(t) = tails.get(k) {
+                v += t.dot(tw);
+            }
+        }
+        v
+    }
+
+    /// `nu += M^-1 G_k impulse` for joint row `k`, its tail included.
+    pub fn add_joint_impulse(&self, k: usize, impulse: f64, nu: &mut [f64]) {
+        self.weighted[k].add_to(impulse, nu);
+        if let Some(i) = k.checked_sub(self.nb - self.ng) {
+            if let Some(t) = self.tails_weighted.get(i) {
+                t.add_to(impulse, nu);
+            }
+        }
     }
 
     /// Marks the joint and normal rows of the islands `relax` flags (by

@@ -47,7 +47,11 @@ impl Mlcp {
         for (k, row) in self.weighted.iter().enumerate() {
             let impulse = if k < nb { self.p_b[k] } else { self.zb[k - nb] };
             if impulse != 0.0 {
-                row.add_to(impulse, nu);
+                if k < nb {
+                    self.add_joint_impulse(k, impulse, nu);
+                } else {
+                    row.add_to(impulse, nu);
+                }
             }
         }
     }

@@ -26,6 +26,7 @@ mod sweep;
 
 use crate::constraint::applied::InvMass;
 use crate::constraint::contact::direction_coefficients as direction;
+use crate::constraint::coupling::Tails;
 use crate::constraint::rows::Row;
 pub use crate::model::params::{
     PgsParams, Stop, DEFAULT_MAX_ITERATIONS, DEFAULT_TOLERANCE, DEFAULT_VELOCITY_TOLERANCE,
@@ -43,6 +44,8 @@ pub struct PgsProblem<'a> {
     /// Rows: `nb` joint rows, `nc` normal rows, `nd` per friction block,
     /// then one per motor.
     pub rows: &'a [Row],
+    /// The couplings' tails: a joint row with one spans both joints.
+    pub tails: Tails<'a>,
     pub offset: &'a [f64],
     /// Each row's constraint-force mixing (compliance, `Mlcp::cfm`): the
     /// row's residual is `G_k^T nu + offset_k + cfm_k lambda_k`.
@@ -209,6 +212,8 @@ pub struct Pgs {
     /// a sweep of the 4,000 pile 7 % slower (1,048 against 980 us): the
     /// sweep waits on its chain of dependent updates, not on memory.
     weighted: Vec<Row>,
+    /// The couplings' tails weighted, as `weighted` (`PgsProblem::tails`).
+    tails_weighted: Vec<Row>,
     /// Per friction block: rows along t1 and t2 (their weighted rows are
     /// `weighted`'s) and the inverse of their 2 x 2 Delassus block.
     tangent: Vec<Tangent>,
@@ -315,6 +320,11 @@ impl Pgs {
         nu.clear();
         nu.extend_from_slice(p.nu_free);
         for (w, &x) in self.weighted.iter().zip(&self.x) {
+            if x != 0.0 {
+                w.add_to(x, nu);
+            }
+        }
+        for (w, &x) in self.tails_weighted.iter().zip(&self.x[p.tails.first..]) {
             if x != 0.0 {
                 w.add_to(x, nu);
             }
@@ -493,6 +503,13 @@ impl Pgs {
                 .zip(p.cfm)
                 .map(|((row, w), cfm)| row.dot(w) + cfm),
         );
+        self.tails_weighted.clear();
+        self.tails_weighted
+            .extend(p.tails.rows.iter().map(|row| row.weighted(p.minv)));
+        for (i, _) in p.tails.rows.iter().enumerate() {
+            let k = p.tails.first + i;
+            self.diag[k] = p.tails.diagonal(k, &p.rows[k], p.minv) + p.cfm[k];
+        }
         // A zero diagonal is a row the updates leave alone.
         for (i, _) in p.held.iter().enumerate().filter(|(_, &h)| h) {
             self.diag[p.nb + i] = 0.0;

@@ -122,8 +122,8 @@ impl Pgs {
         for &k in rows {
             let k = k as usize;
             let Some(i) = k.checked_sub(p.nb) else {
-                let v = p.rows[k].velocity(nu) + p.offset[k] + p.cfm[k] * x[k];
-                let free = p.rows[k].velocity(p.nu_free) + p.offset[k];
+                let v = p.tails.velocity(k, &p.rows[k], nu) + p.offset[k] + p.cfm[k] * x[k];
+                let free = p.tails.velocity(k, &p.rows[k], p.nu_free) + p.offset[k];
                 out.abs2 += v * v;
                 out.joint2 += free * free;
                 continue;

@@ -85,6 +85,26 @@ impl Velocities for Held {
     }
 }
 
+/// All of `nu`, for a coupling's row (`constraint::coupling`): its tail
+/// read and written beside the row it is given.
+struct WithTail<'a> {
+    nu: &'a mut [f64],
+    tail: &'a Row,
+    weighted: &'a Row,
+}
+
+impl Velocities for WithTail<'_> {
+    #[inline]
+    fn velocity(&self, row: &Row) -> f64 {
+        row.velocity(self.nu) + self.tail.velocity(self.nu)
+    }
+    #[inline]
+    fn add(&mut self, weighted: &Row, impulse: f64) {
+        weighted.add_to(impulse, self.nu);
+        self.weighted.add_to(impulse, self.nu);
+    }
+}
+
 impl Pgs {
     /// One Gauss-Seidel sweep of island `g`: its joint rows, then each
     /// contact's normal row followed at once by its friction block, so that the block's cone
@@ -109,7 +129,19 @@ impl Pgs {
         for &k in p.groups.rows_of(g) {
             let k = k as usize;
             let Some(i) = k.checked_sub(p.nb) else {
-                largest = largest.max(self.update_row(p, k, omega, false, &mut x, nu));
+                let change = match p.tails.get(k) {
+                    // A coupling: its tail on the velocities and the impulse.
+                    Some(tail) => {
+                        let mut with = WithTail {
+                            nu: &mut *nu,
+                            tail,
+                            weighted: &self.tails_weighted[k - p.tails.first],
+                        };
+                        self.update_row(p, k, omega, false, &mut x, &mut with)
+                    }
+                    None => self.update_row(p, k, omega, false, &mut x, nu),
+                };
+                largest = largest.max(change);
                 continue;
             };
             let change = self.update_contact(p, i, omega, &mut x, nu);
