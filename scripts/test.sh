@@ -29,7 +29,7 @@ if [ "$#" -eq 0 ]; then
     echo "== the analytic engine tests again, with the iterative solver (prox PGS)"
     COSIM_TEST_SOLVER=pgs cargo test --release -p cosim-tests --test contact_analytic \
         --test joints --test hinges --test inputs --test held_contacts --test sliders \
-        --test limits --test motors --test shapes --test cylinders --test couplings 2>&1 | tee -a "$log"
+        --test limits --test motors --test shapes --test cylinders --test couplings --test armature 2>&1 | tee -a "$log"
     pgs_status=${PIPESTATUS[0]}
     [ "$status" -eq 0 ] && status=$pgs_status
 fi

@@ -5,7 +5,7 @@ with joints, a mocap body or a child of the world, with the bodies welded
 to it without joints), each with its mass, centre of mass and inertia
 about it in the world at qpos0, combined here from MuJoCo's per-body
 values by the parallel axis theorem; and every joint's world anchor,
-axis and range (when limited). The configuration is qpos0 with each
+axis, range (when limited) and armature. The configuration is qpos0 with each
 limited hinge or slide coordinate outside its range moved to the nearer
 limit, where the importer starts it (MuJoCo starts it outside and lets the
 limit push it in). Meshes' masses come from their convex hulls
@@ -106,6 +106,7 @@ def compile_file(path):
                 "axis": d.xaxis[j].tolist(),
                 "range": m.jnt_range[j].tolist() if m.jnt_limited[j] else None,
                 "effort": effort.get(j),
+                "armature": float(m.dof_armature[m.jnt_dofadr[j]]),
             }
         )
     # The geoms MuJoCo's viewer draws by default (groups 0 to 2) on bodies

@@ -184,6 +184,51 @@ pub fn elbow_pair(h: f64, steps: u64, spin: f64, extra: &str) -> Engine {
     engine(&s)
 }
 
+/// The standard output of `python3 args` (with the `mujoco` package that
+/// scripts/test.sh installs), run in a temporary folder: MuJoCo writes
+/// its warnings to MUJOCO_LOG.TXT in the working folder. Panics with its
+/// error output if it fails.
+pub fn mujoco_python<I, S>(args: I) -> String
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<std::ffi::OsStr>,
+{
+    let out = std::process::Command::new("python3")
+        .current_dir(std::env::temp_dir())
+        .args(args)
+        .output()
+        .expect("python3 with the mujoco package (scripts/test.sh installs it)");
+    assert!(
+        out.status.success(),
+        "python3: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// The coordinate and rate of the hinge or slider named `name`.
+pub fn coordinate_of(e: &Engine, name: &str) -> (f64, f64) {
+    let j = e
+        .model()
+        .joints
+        .iter()
+        .find(|j| j.name == name)
+        .unwrap_or_else(|| panic!("no joint {name:?}"));
+    cosim_server::engine::constraint::joint::coordinate(j, e.state()).expect("a hinge or slider")
+}
+
+/// The level pendulum's hinge (`level_pendulum`), its lines to follow.
+pub fn pivot() -> String {
+    joint_of(
+        "revolute",
+        "pivot",
+        "world",
+        "bob",
+        [0.0, 0.0, 1.0],
+        Some([0.0, 1.0, 0.0]),
+    )
+}
+
 /// A pendulum hinged to the world about y at (0, 0, 1), its bob (1 kg, r
 /// = 0.05 m) 0.5 m along x, level at the start (a positive angle swings
 /// it down) and turning at `w0` rad/s, with `extra` lines added to the
@@ -201,14 +246,7 @@ pub fn level_pendulum(h: f64, steps: u64, gravity: [f64; 3], w0: f64, extra: &st
         0.0,
     );
     s += &format!("angular_velocity = [0.0, {w0:e}, 0.0]\n");
-    s += &joint_of(
-        "revolute",
-        "pivot",
-        "world",
-        "bob",
-        [0.0, 0.0, 1.0],
-        Some([0.0, 1.0, 0.0]),
-    );
+    s += &pivot();
     s += extra;
     engine(&s)
 }

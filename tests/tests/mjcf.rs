@@ -2,7 +2,8 @@
 //! gymnasium's MuJoCo models) read by the importer and checked against
 //! MuJoCo's own compiler (the `mujoco` Python package,
 //! tests/reference/mujoco_compile.py): every body's mass, centre of mass
-//! and inertia, every joint's anchor, axis, range and effort bound, to 1e-9 relative
+//! and inertia, every joint's anchor, axis, range, effort bound and
+//! armature, to 1e-9 relative
 //! (1e-6 for a body with mesh geoms: MuJoCo keeps a mesh's vertices in
 //! single precision, whose rounding, 6e-8, is what the two differ by).
 //! `scripts/mjcf-data.sh` downloads the two packages' files once into
@@ -53,20 +54,8 @@ pub fn corpus() -> Vec<PathBuf> {
 /// MuJoCo's compilation of each file, one JSON object per file.
 fn reference(files: &[PathBuf]) -> Vec<Value> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("reference/mujoco_compile.py");
-    // MuJoCo writes its warnings (settotalmass is deprecated) to
-    // MUJOCO_LOG.TXT in the working folder: a temporary one.
-    let out = Command::new("python3")
-        .current_dir(std::env::temp_dir())
-        .arg(&script)
-        .args(files)
-        .output()
-        .expect("python3 with the mujoco package (scripts/test.sh installs it)");
-    assert!(
-        out.status.success(),
-        "mujoco_compile.py: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout)
+    let args = std::iter::once(script.as_os_str()).chain(files.iter().map(|f| f.as_os_str()));
+    cosim_tests::mujoco_python(args)
         .lines()
         .map(|l| serde_json::from_str(l).expect("a JSON line"))
         .collect()
@@ -277,6 +266,15 @@ fn compare(imported: &Imported, mj: &Value) -> (f64, String, usize, usize) {
                 ),
             }
         }
+        // A rotor on the joint: MuJoCo's dof_armature (each of a ball's
+        // three the same).
+        let armature = j["armature"].as_f64().expect("armature");
+        let o = ours.armature.unwrap_or(0.0);
+        note(
+            (armature - o).abs() / armature.max(1e-300),
+            1e-9,
+            format!("joint {name:?} armature {o} against {armature}"),
+        );
     }
     (worst.0, worst.1, bodies, joints)
 }
@@ -675,17 +673,7 @@ fn an_equality_joint_couples_two_hinges() {
     );
     let mut e =
         cosim_server::engine::Engine::new(cosim_server::engine::Model::from_scene(&imported.scene));
-    let q = |e: &cosim_server::engine::Engine, name: &str| {
-        let j = e
-            .model()
-            .joints
-            .iter()
-            .find(|j| j.name == name)
-            .expect(name);
-        cosim_server::engine::constraint::joint::coordinate(j, e.state())
-            .expect("a hinge")
-            .0
-    };
+    let q = |e: &cosim_server::engine::Engine, name: &str| cosim_tests::coordinate_of(e, name).0;
     let mut worst = 0.0f64;
     for n in 1..=1000 {
         let r = e.step();

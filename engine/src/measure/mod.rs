@@ -42,6 +42,13 @@ pub fn energy(model: &Model, state: &State) -> Energy {
         kinetic += 0.5 * b.mass * s.v.norm_squared() + 0.5 * s.w.dot(&(j_world * s.w));
         offset += 0.5 * h * b.mass * (-g).dot(&s.v);
     }
+    // The rotors' (`constraint::armature`): theirs is the bodies' energy
+    // their rows took or gave.
+    kinetic += model
+        .joints
+        .iter()
+        .map(|j| crate::constraint::armature::energy(j, state))
+        .sum::<f64>();
     let total = kinetic + potential;
     Energy {
         kinetic,

@@ -288,6 +288,9 @@ pub struct Joint {
     pub limits: Option<Limits>,
     /// A hinge's or slider's velocity motor (`motor.rs`).
     pub motor: Option<Motor>,
+    /// A rotor's inertia on the coordinate's rate (kg m^2, or kg for a
+    /// slider; 0 for none): `constraint::armature`.
+    pub armature: f64,
 }
 
 /// `q_follower = ratio q_leader + offset` (a URDF `<mimic>`, an MJCF
@@ -371,6 +374,20 @@ impl Joint {
             (Turning::Axis { .. }, _) => "revolute",
             (Turning::Locked { .. }, Some(_)) => "prismatic",
             (Turning::Locked { .. }, None) => "fixed",
+        }
+    }
+
+    /// The rotor's rows (`constraint::armature`): one on a hinge's or
+    /// slider's rate, three on a spherical joint's relative spin, none
+    /// without armature (or on a fixed joint, which has no rate).
+    pub fn armature_rows(&self) -> usize {
+        if self.armature <= 0.0 {
+            return 0;
+        }
+        match (self.turning, self.slide) {
+            (Turning::Free, _) => 3,
+            (Turning::Locked { .. }, None) => 0,
+            _ => 1,
         }
     }
 
@@ -691,6 +708,7 @@ impl Model {
                         },
                         max_effort: m.max_effort,
                     }),
+                    armature: j.armature.unwrap_or(0.0),
                 }
             })
             .collect();
@@ -924,9 +942,15 @@ impl Model {
 }
 
 impl Model {
-    /// Rows of the joint block: every joint's, then one per coupling.
+    /// Rows of the joint block: every joint's, the rotors'
+    /// (`constraint::armature`), then one per coupling.
     pub fn joint_rows(&self) -> usize {
-        self.joint_start[self.joints.len()] + self.couplings.len()
+        self.joint_start[self.joints.len()] + self.armature_rows() + self.couplings.len()
+    }
+
+    /// The rotors' rows (`Joint::armature_rows`).
+    pub fn armature_rows(&self) -> usize {
+        self.joints.iter().map(Joint::armature_rows).sum()
     }
 
     /// The name of one side of an impulse, as the outputs write it.

@@ -331,7 +331,7 @@ fn relaxed_run(
     scratch.offset.clear();
     scratch.offset.extend_from_slice(&m.offset);
     for k in 0..m.nb {
-        if mask[groups.island_of_row(k)] {
+        if m.drifts(k) && mask[groups.island_of_row(k)] {
             scratch.offset[k] = 0.0;
         }
     }

@@ -70,8 +70,8 @@ impl Engine {
         for &j in &model.motors {
             smooth.ok[groups.island_of_row(model.joint_start[j])] = false;
         }
-        // RATTLE holds the joints, not the couplings.
-        for k in nb - ws.mlcp.ng..nb {
+        // RATTLE holds the joints, not the rotors or the couplings.
+        for k in ws.mlcp.armature().start..nb {
             smooth.ok[groups.island_of_row(k)] = false;
         }
         smooth.island_of.clear();

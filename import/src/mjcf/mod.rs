@@ -31,10 +31,10 @@
 //!   out is said);
 //! - `<contact><exclude>` of two jointed bodies, equality `connect`
 //!   (spherical joint), `weld` (fixed joint) and `joint` (its linear part:
-//!   the scene's `mimic`).
+//!   the scene's `mimic`);
+//! - a hinge's, slide's or ball's `armature` (a free joint's is said).
 //!
-//! Left out and said: tendons and what acts on them, armature,
-//! heightfields, activation dynamics, an equality `joint`'s terms past
+//! Left out and said: tendons and what acts on them, heightfields, activation dynamics, an equality `joint`'s terms past
 //! the linear one.
 
 mod defaults;
@@ -730,6 +730,7 @@ impl Builder<'_> {
             motor: None,
             max_effort: None,
             mimic: None,
+            armature: None,
         })
     }
 
@@ -992,18 +993,26 @@ impl Builder<'_> {
         }
         for (k, j) in joints.iter().enumerate() {
             let Some(s) = find(scene, &names[k]) else {
-                if j.stiffness > 0.0 || j.damping > 0.0 || j.frictionloss > 0.0 {
+                if j.stiffness > 0.0 || j.damping > 0.0 || j.frictionloss > 0.0 || j.armature > 0.0
+                {
                     self.notes.push(format!(
-                        "joint {:?}: its stiffness, damping and friction are left out (a ball or free joint)",
+                        "joint {:?}: its stiffness, damping, friction and armature are left out (a free joint)",
                         names[k]
                     ));
                 }
                 continue;
             };
-            if j.armature > 0.0 {
-                self.note_once(
-                    "joint armature is not modelled (maximal coordinates have no rotor inertia)",
-                );
+            if j.armature > 0.0 && scene.joints[s].kind != Kind::Fixed {
+                scene.joints[s].armature = Some(j.armature);
+            }
+            if scene.joints[s].kind == Kind::Spherical {
+                if j.stiffness > 0.0 || j.damping > 0.0 || j.frictionloss > 0.0 {
+                    self.notes.push(format!(
+                        "joint {:?}: its stiffness, damping and friction are left out (a ball joint)",
+                        names[k]
+                    ));
+                }
+                continue;
             }
             if scene.joints[s].motor.is_some() {
                 if j.stiffness > 0.0 || j.frictionloss > 0.0 {
@@ -1131,6 +1140,7 @@ impl Builder<'_> {
                 motor: None,
                 max_effort: None,
                 mimic: None,
+                armature: None,
             });
         }
     }
@@ -1329,6 +1339,7 @@ fn fixed(name: &str, a: &str, b: &str, at: Vector3<f64>) -> JointDesc {
         motor: None,
         max_effort: None,
         mimic: None,
+        armature: None,
     }
 }
 

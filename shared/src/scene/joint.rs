@@ -94,6 +94,13 @@ pub struct JointDesc {
     /// pushes back on the leader as a gear train does.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mimic: Option<MimicDesc>,
+    /// Not for a fixed joint: the inertia of a rotor geared to the joint
+    /// (kg m^2 for a hinge, each of a spherical joint's three axes; kg for
+    /// a slider), >= 0: kinetic energy `armature x'^2 / 2` on the
+    /// coordinate's rate, MuJoCo's joint `armature` (a motor's reflected
+    /// inertia). Default 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub armature: Option<f64>,
 }
 
 /// A coupling of a joint's coordinate to another's (`JointDesc::mimic`).

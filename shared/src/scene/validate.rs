@@ -371,6 +371,15 @@ impl Scene {
                 }
                 positive(e).map_err(|m| err(f("max_effort"), m))?;
             }
+            if let Some(a) = j.armature {
+                if j.kind == JointKind::Fixed {
+                    return Err(err(
+                        f("armature"),
+                        "a fixed joint has no coordinate for a rotor to turn with".into(),
+                    ));
+                }
+                nonneg(a).map_err(|m| err(f("armature"), m))?;
+            }
             if let Some(e) = j.limit_restitution {
                 if j.range.is_none() {
                     return Err(err(

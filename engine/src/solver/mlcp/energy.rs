@@ -14,7 +14,9 @@ impl Mlcp {
     /// `K(nu') - K(nu_free) = 1/2 (nu' + nu_free)^T M (nu' - nu_free)
     ///                     = 1/2 sum_k lambda_k G_k^T (nu' + nu_free)`
     /// over the basis rows (joint impulses `p_b`, contact impulses on the
-    /// basis); no mass matrix needed. The rows' terms are summed per island
+    /// basis); no mass matrix needed. A rotor's row (`constraint::armature`)
+    /// is left out: what its impulse gives the bodies the rotor gave up,
+    /// the two one system whose energy the measure counts. The rows' terms are summed per island
     /// in row order, so an island's sum does not depend on the others.
     pub fn kinetic_change_by_island(
         &self,
@@ -25,10 +27,10 @@ impl Mlcp {
     ) {
         out.clear();
         out.resize(groups.len(), 0.0);
-        let (nb, tails) = (self.nb, self.tails());
+        let (nb, tails, rotors) = (self.nb, self.tails(), self.armature());
         for (k, row) in self.basis.iter().enumerate() {
             let lambda = if k < nb { self.p_b[k] } else { self.zb[k - nb] };
-            if lambda != 0.0 {
+            if lambda != 0.0 && !rotors.contains(&k) {
                 out[self.basis_island(groups, k)] +=
                     0.5 * lambda * (tails.velocity(k, row, nu) + tails.velocity(k, row, nu_free));
             }
@@ -48,9 +50,9 @@ impl Mlcp {
     ) {
         out.clear();
         out.resize(groups.len(), 0.0);
-        let tails = self.tails();
+        let (tails, rotors) = (self.tails(), self.armature());
         for (k, (row, &l)) in self.rows.iter().zip(lambda).enumerate() {
-            if l != 0.0 {
+            if l != 0.0 && !rotors.contains(&k) {
                 out[self.row_island(groups, k)] +=
                     0.5 * l * (tails.velocity(k, row, nu) + tails.velocity(k, row, nu_free));
             }
@@ -84,7 +86,7 @@ impl Mlcp {
         let nb = self.nb;
         for k in 0..nb + self.nc {
             let (joint, v) = (k < nb, self.offset[k]);
-            if joint || v < 0.0 {
+            if self.drifts(k) || (!joint && v < 0.0) {
                 let spring = if joint {
                     p.joint_compliance
                 } else {
@@ -150,7 +152,7 @@ impl Mlcp {
         out.clear();
         out.resize(groups.len(), 0.0);
         let nb = self.nb;
-        for k in 0..nb {
+        for k in (0..nb).filter(|&k| self.drifts(k)) {
             out[groups.island_of_row(k)] += (self.p_b[k] * offset[k]).abs();
         }
         for i in 0..self.nc {

@@ -192,10 +192,13 @@ pub struct Mlcp {
     /// solver, see [`Mlcp::add_friction_rows`]) friction rows and the
     /// motors' rows.
     pub rows: Vec<Row>,
-    /// Joint rows: every joint's, then one per coupling (the last `ng`),
+    /// Joint rows: every joint's, the rotors', then one per coupling (the last `ng`),
     /// whose tails are `tails` (`constraint::coupling`).
     pub nb: usize,
     pub ng: usize,
+    /// The rotors' rows (`constraint::armature`), the `na` joint rows
+    /// before the couplings'.
+    pub na: usize,
     pub tails: Vec<Row>,
     /// `M^-1` times each tail ([`Row::weighted`]).
     tails_weighted: Vec<Row>,
@@ -468,7 +471,13 @@ impl Mlcp {
                 &mut self.offset,
             );
         }
-        // Couplings last: their heads are joint rows, their tails beside.
+        // The rotors' rows (armature.rs), then the couplings: their heads
+        // are joint rows, their tails beside.
+        let before = self.rows.len();
+        for joint in &model.joints {
+            crate::constraint::armature::push_rows(joint, state, &mut self.rows, &mut self.offset);
+        }
+        self.na = self.rows.len() - before;
         self.tails.clear();
         for c in &model.couplings {
             let (head, tail, offset) =
@@ -496,6 +505,13 @@ impl Mlcp {
         let joint_cfm = p.joint_compliance.map_or(0.0, |k| k.cfm(p.h));
         let contact_cfm = p.contact_compliance.map_or(0.0, |k| k.cfm(p.h));
         self.cfm.resize(self.nb, joint_cfm);
+        let mut k = self.nb - self.ng - self.na;
+        for joint in &model.joints {
+            for _ in 0..joint.armature_rows() {
+                self.cfm[k] = crate::constraint::armature::compliance(joint);
+                k += 1;
+            }
+        }
         self.cfm.resize(self.nb + self.nc, contact_cfm);
         self.basis.extend_from_slice(&self.rows);
         for i in 0..self.nc {
@@ -668,8 +684,23 @@ impl Mlcp {
             .extend((0..self.nb + self.nc).map(|k| relax[groups.island_of_row(k)]));
     }
 
+    /// The rotors' rows (`constraint::armature`) in the joint block.
+    pub fn armature(&self) -> std::ops::Range<usize> {
+        let end = self.nb - self.ng;
+        end - self.na..end
+    }
+
+    /// Whether row `k`'s constant term is a joint's drift term: a joint
+    /// row's but a rotor's, whose constant is its rate (no drift).
+    pub fn drifts(&self, k: usize) -> bool {
+        k < self.nb && !self.armature().contains(&k)
+    }
+
     /// Whether joint or normal row `k` is relaxed under `offsets`.
     fn relaxes(&self, offsets: Offsets, k: usize) -> bool {
+        if self.armature().contains(&k) {
+            return false;
+        }
         match offsets {
             Offsets::Full => false,
             Offsets::Relaxed => true,
