@@ -102,6 +102,38 @@ pub enum Command {
         #[arg(long, default_value_t = 30.0)]
         timeout: f64,
     },
+    /// Run many experiments of one scene as parallel processes, each in
+    /// its own iceoryx2 domain and folder, and write one table of their
+    /// summaries (OUT/sweep.csv); an interrupted sweep resumes. See
+    /// docs/sweeps.md.
+    Sweep {
+        /// The sweep file (TOML): scene, duration, solver, controller,
+        /// `[grid]` and `[[run]]`.
+        file: PathBuf,
+        /// The sweep's folder: a folder per run and the table.
+        #[arg(long)]
+        out: PathBuf,
+        /// Runs at once (default: the file's `parallel`, else the cores).
+        #[arg(long)]
+        parallel: Option<usize>,
+        /// Only run number N (as `--list` numbers them): one task of a
+        /// Slurm job array or a Ray job; `--table` joins them after.
+        #[arg(long)]
+        only: Option<usize>,
+        /// Print the runs, a line each (number, parameters), and stop.
+        #[arg(long)]
+        list: bool,
+        /// Only write the table from the runs' folders.
+        #[arg(long)]
+        table: bool,
+        /// Run again runs whose summary is there already.
+        #[arg(long)]
+        redo: bool,
+        /// The `cosim-server` program (default: the one beside `cosim`,
+        /// else on PATH).
+        #[arg(long)]
+        server: Option<PathBuf>,
+    },
     /// Open-loop torques from a CSV file with the header
     /// `step,joint,tx,ty,tz`: each row is sent at its step and held.
     Play {
@@ -143,6 +175,28 @@ fn print_info(r: &ControlResponse) {
 fn execute(cli: &Cli) -> Result<(), Box<dyn std::error::Error>> {
     let name = cli.name.as_str();
     match &cli.command {
+        Command::Sweep {
+            file,
+            out,
+            parallel,
+            only,
+            list,
+            table,
+            redo,
+            server,
+        } => {
+            let o = crate::sweep::Options {
+                file: file.clone(),
+                out: out.clone(),
+                parallel: *parallel,
+                only: *only,
+                list: *list,
+                table: *table,
+                redo: *redo,
+                server: server.clone(),
+            };
+            crate::sweep::sweep(&o)?;
+        }
         Command::List => {
             let servers = list_servers()?;
             if servers.is_empty() {

@@ -25,7 +25,7 @@ impl Connection {
     /// Connects to the server `name`: fails with [`ClientError::NoServer`]
     /// when none runs.
     pub fn connect(name: &str) -> Result<Connection, ClientError> {
-        let node = NodeBuilder::new()
+        let node = crate::domain::node()?
             .create::<ipc::Service>()
             .map_err(|e| ipc("cannot create an iceoryx2 node")(&e))?;
         let control_service = node

@@ -14,10 +14,12 @@ pub mod arm;
 pub mod cli;
 pub mod pd;
 pub mod push;
+pub mod sweep;
 pub mod view;
 
 mod connection;
 mod controller;
+pub mod domain;
 mod monitor;
 mod names;
 mod reader;
@@ -263,7 +265,7 @@ pub fn when_up<T>(
 /// services whose owner is alive.
 pub fn list_servers() -> Result<Vec<String>, ClientError> {
     let mut names = Vec::new();
-    ipc::Service::list(Config::global_config(), |details| {
+    ipc::Service::list(domain::config()?, |details| {
         let s = details.static_details.name().to_string();
         if let Some(n) = services::server_of(&s) {
             names.push(n.to_string());
@@ -280,7 +282,7 @@ pub fn list_servers() -> Result<Vec<String>, ClientError> {
 /// `Some(false)` dead or gone, `None` when it cannot be told.
 pub fn node_alive(id: u128) -> Option<bool> {
     let mut found = None;
-    let listed = Node::<ipc::Service>::list(Config::global_config(), |state| {
+    let listed = Node::<ipc::Service>::list(domain::config().ok()?, |state| {
         if state.node_id().value() == id {
             found = Some(match &state {
                 NodeState::Alive(_) => Some(true),
@@ -301,7 +303,7 @@ pub fn node_alive(id: u128) -> Option<bool> {
 /// The pid of a node, for messages.
 pub fn node_pid(id: u128) -> Option<u32> {
     let mut pid = None;
-    let _ = Node::<ipc::Service>::list(Config::global_config(), |state| {
+    let _ = Node::<ipc::Service>::list(domain::config().ok()?, |state| {
         if state.node_id().value() == id {
             if let NodeState::Alive(v) = &state {
                 pid = v.details().as_ref().map(|d| d.process_id().value() as u32);

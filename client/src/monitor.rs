@@ -26,7 +26,7 @@ impl Monitor {
     /// `--publish-every N`: every N-th step's frame and the last. A server
     /// without it has no such stream ([`ClientError::NoServer`] names it).
     pub fn open_every(name: &str, buffer: usize) -> Result<Monitor, ClientError> {
-        let node = NodeBuilder::new()
+        let node = crate::domain::node()?
             .create::<ipc::Service>()
             .map_err(|e| ipc("cannot create an iceoryx2 node")(&e))?;
         let stream = (
@@ -38,12 +38,12 @@ impl Monitor {
     }
 
     fn create(name: &str, buffer: usize, wake: bool) -> Result<Monitor, ClientError> {
-        let node = NodeBuilder::new()
+        let node = crate::domain::node()?
             .create::<ipc::Service>()
             .map_err(|e| ipc("cannot create an iceoryx2 node")(&e))?;
         let exists = ipc::Service::does_exist(
             &service_name(&services::state(name))?,
-            Config::global_config(),
+            crate::domain::config()?,
             MessagingPattern::PublishSubscribe,
         )
         .map_err(|e| ipc("cannot look up the state service")(&e))?;

@@ -105,6 +105,25 @@ def _open(name: str, what: str, open_fn):
         raise CosimError(f"cannot open cosim/{name}/{what}: {e}") from e
 
 
+def _node():
+    """An iceoryx2 node in the domain `COSIM_DOMAIN` names (the Rust
+    client's rule: the global configuration when unset or empty, else one
+    whose file prefix is `cosim_<domain>_`, so that processes of one
+    domain see only one another)."""
+    domain = os.environ.get("COSIM_DOMAIN", "")
+    builder = iox2.NodeBuilder.new()
+    if domain:
+        ok = len(domain) <= 64 and all(c.isascii() and (c.isalnum() or c in "-_") for c in domain)
+        if not ok:
+            raise CosimError(
+                f"COSIM_DOMAIN={domain!r}: a domain is 1 to 64 letters, digits, '-' or '_'"
+            )
+        config = iox2.config.default()
+        config.global_cfg.prefix = iox2.FileName.new(f"cosim_{domain}_")
+        builder = builder.config(config)
+    return builder.create(iox2.ServiceType.Ipc)
+
+
 class Connection:
     """The control service of server `name`: info, pause, resume, step,
     shutdown. Controllers and monitors have one (`.connection`)."""
@@ -112,7 +131,7 @@ class Connection:
     def __init__(self, name: str = "default"):
         _quiet()
         self.name = name
-        self.node = iox2.NodeBuilder.new().create(iox2.ServiceType.Ipc)
+        self.node = _node()
         control = _open(
             name,
             "control",

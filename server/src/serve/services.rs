@@ -110,7 +110,8 @@ impl Services {
             .as_str()
             .try_into()
             .map_err(|e| err("bad node name".into())(&e))?;
-        let node = NodeBuilder::new()
+        let node = cosim_client::domain::node()
+            .map_err(|e| err("cannot read the domain".into())(&e))?
             .name(&node_name)
             .create::<ipc::Service>()
             .map_err(|e| err("cannot create the iceoryx2 node".into())(&e))?;
