@@ -18,7 +18,7 @@
 //! nu' = ...`, so a stiff drive on a light link holds as it does in
 //! MuJoCo. Its constant is no drift: it is never relaxed, asks no energy
 //! budget, and the row's impulse moves energy between the rotor and the
-//! bodies, which the energy check counts as the rotor's (`mlcp::energy`).
+//! bodies: the energy check counts both (`Mlcp::rotor_change`).
 
 use crate::constraint::joint::body;
 use crate::constraint::motor::rate_row;

@@ -15,8 +15,8 @@ impl Mlcp {
     ///                     = 1/2 sum_k lambda_k G_k^T (nu' + nu_free)`
     /// over the basis rows (joint impulses `p_b`, contact impulses on the
     /// basis); no mass matrix needed. A rotor's row (`constraint::armature`)
-    /// is left out: what its impulse gives the bodies the rotor gave up,
-    /// the two one system whose energy the measure counts. The rows' terms are summed per island
+    /// adds its rotor's change ([`Mlcp::rotor_change`]): the bodies and
+    /// the rotors are one system, whose energy the measure counts. The rows' terms are summed per island
     /// in row order, so an island's sum does not depend on the others.
     pub fn kinetic_change_by_island(
         &self,
@@ -27,12 +27,13 @@ impl Mlcp {
     ) {
         out.clear();
         out.resize(groups.len(), 0.0);
-        let (nb, tails, rotors) = (self.nb, self.tails(), self.armature());
+        let (nb, tails) = (self.nb, self.tails());
         for (k, row) in self.basis.iter().enumerate() {
             let lambda = if k < nb { self.p_b[k] } else { self.zb[k - nb] };
-            if lambda != 0.0 && !rotors.contains(&k) {
+            if lambda != 0.0 {
                 out[self.basis_island(groups, k)] +=
-                    0.5 * lambda * (tails.velocity(k, row, nu) + tails.velocity(k, row, nu_free));
+                    0.5 * lambda * (tails.velocity(k, row, nu) + tails.velocity(k, row, nu_free))
+                        + self.rotor_change(k, lambda);
             }
         }
     }
@@ -50,13 +51,28 @@ impl Mlcp {
     ) {
         out.clear();
         out.resize(groups.len(), 0.0);
-        let (tails, rotors) = (self.tails(), self.armature());
+        let tails = self.tails();
         for (k, (row, &l)) in self.rows.iter().zip(lambda).enumerate() {
-            if l != 0.0 && !rotors.contains(&k) {
+            if l != 0.0 {
                 out[self.row_island(groups, k)] +=
-                    0.5 * l * (tails.velocity(k, row, nu) + tails.velocity(k, row, nu_free));
+                    0.5 * l * (tails.velocity(k, row, nu) + tails.velocity(k, row, nu_free))
+                        + self.rotor_change(k, l);
             }
         }
+    }
+
+    /// The kinetic energy change of the rotor of row `k` (0 unless a
+    /// rotor's, `constraint::armature`) that gave the bodies the impulse
+    /// `lambda`: its rate goes from `x'_n = -offset` to `x'_n - lambda /
+    /// I_a`, so it changes by `lambda offset + lambda^2 / (2 I_a)` with
+    /// `1 / I_a` the row's compliance. Solved exactly, the rotor's rate is
+    /// the bodies' and this is what their share gained; an answer that is
+    /// not (an iteration cap) gets no energy from a rotor it did not slow.
+    fn rotor_change(&self, k: usize, lambda: f64) -> f64 {
+        if !self.armature().contains(&k) {
+            return 0.0;
+        }
+        lambda * self.offset[k] + 0.5 * self.cfm[k] * lambda * lambda
     }
 
     /// The kinetic energy the stabilisation may give (J), island by island
