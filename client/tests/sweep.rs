@@ -157,6 +157,12 @@ fn each_run_has_its_controller_in_its_own_domain() {
             .all(|r| r["status"] == "ok" && r["steps"] == "1000"),
         "{rows:?}"
     );
+    // The lockstep server's summary has the energy figures `run`'s has.
+    for r in &rows {
+        for f in ["energy_initial", "energy_final", "max_energy_rise"] {
+            assert!(r[f].parse::<f64>().is_ok(), "{f}: {r:?}");
+        }
+    }
     for (i, target) in [5.0, 25.0].into_iter().enumerate() {
         let log = std::fs::read_to_string(out.join(format!("run-000{i}/controller.log"))).unwrap();
         let final_deg: f64 = log

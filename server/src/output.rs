@@ -235,6 +235,46 @@ impl Writers {
 /// The ladder's counts as `summary.json` holds them: steps by the highest
 /// rung of Lemke's ladder they needed, refined answers, and the steps that
 /// fell back to another formulation (see `engine::solver::fallback`).
+/// The energy over a run (J): at the start, after the last step, and the
+/// largest rise over one step from the energy before it (the start's,
+/// then each step's), so that a step that gains energy is seen whatever
+/// gave it (an input, the stabilisation, a projection).
+#[derive(Debug, Default, Clone, Copy)]
+pub struct EnergyTally {
+    pub initial: f64,
+    pub last: f64,
+    pub max_rise: f64,
+    pub max_rise_step: u64,
+}
+
+impl EnergyTally {
+    /// From the energy of the first state.
+    pub fn start(total: f64) -> EnergyTally {
+        EnergyTally {
+            initial: total,
+            last: total,
+            ..EnergyTally::default()
+        }
+    }
+
+    /// After a step: its energy, if it was taken.
+    pub fn add(&mut self, r: &StepReport) {
+        if r.ok() {
+            let rise = r.energy.total - self.last;
+            if rise > self.max_rise {
+                (self.max_rise, self.max_rise_step) = (rise, r.step);
+            }
+            self.last = r.energy.total;
+        }
+    }
+
+    /// The state jumped (a reset, a restore): the next step's rise counts
+    /// from `total`, the new state's.
+    pub fn jumped(&mut self, total: f64) {
+        self.last = total;
+    }
+}
+
 pub fn ladder_json(c: &crate::engine::LadderCounts) -> serde_json::Value {
     use crate::engine::solver::Rung;
     let mut rungs = serde_json::Map::new();

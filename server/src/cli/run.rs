@@ -100,13 +100,7 @@ struct Tally {
     /// Joint-steps whose held effort its bound clamped.
     clamped_efforts: u64,
     ladder: crate::engine::LadderCounts,
-    /// The largest rise of the total energy over one step (J) and its
-    /// step, from the energy before it (the start's, then each step's):
-    /// said in the summary, so that a step that gains energy is seen
-    /// whatever gave it (an input, the stabilisation, a projection).
-    energy_before: f64,
-    max_rise: f64,
-    max_rise_step: u64,
+    energy: crate::output::EnergyTally,
 }
 
 impl Tally {
@@ -122,13 +116,7 @@ impl Tally {
         self.projected += r.projected as u64;
         self.clamped_efforts += r.clamped_efforts as u64;
         self.ladder.add(r);
-        if r.ok() {
-            let rise = r.energy.total - self.energy_before;
-            if rise > self.max_rise {
-                (self.max_rise, self.max_rise_step) = (rise, r.step);
-            }
-            self.energy_before = r.energy.total;
-        }
+        self.energy.add(r);
         if let Some(e) = r.error {
             self.failures += 1;
             self.first_failure
@@ -397,7 +385,7 @@ fn simulate(
     let energy_initial = crate::engine::measure::energy(engine.model(), engine.state());
     writers.state(&engine)?;
     let mut tally = Tally {
-        energy_before: energy_initial.total,
+        energy: crate::output::EnergyTally::start(energy_initial.total),
         ..Tally::default()
     };
     let mut progress = crate::progress::Progress::new(quiet, Some(steps));
@@ -490,8 +478,8 @@ fn simulate(
         "energy_final": energy_final.total,
         "energy_midpoint_initial": energy_initial.midpoint,
         "energy_midpoint_final": energy_final.midpoint,
-        "max_energy_rise": tally.max_rise,
-        "max_energy_rise_step": tally.max_rise_step,
+        "max_energy_rise": tally.energy.max_rise,
+        "max_energy_rise_step": tally.energy.max_rise_step,
         "wall_seconds": wall,
     });
     let path = out.join("summary.json");
@@ -559,10 +547,10 @@ fn simulate(
             energy_final.total,
             energy_initial.midpoint,
             energy_final.midpoint,
-            match tally.max_rise > 0.0 {
+            match tally.energy.max_rise > 0.0 {
                 true => format!(
                     "; largest rise in a step {:.3e} J (step {})",
-                    tally.max_rise, tally.max_rise_step
+                    tally.energy.max_rise, tally.energy.max_rise_step
                 ),
                 false => String::new(),
             }

@@ -54,6 +54,11 @@ impl Server {
         }
         self.c.max_penetration = self.c.max_penetration.max(report.max_penetration);
         self.c.max_joint_error = self.c.max_joint_error.max(report.max_joint_error);
+        self.c.max_joint_angle_error = self
+            .c
+            .max_joint_angle_error
+            .max(report.max_joint_angle_error);
+        self.c.energy.add(&report);
         self.c.projected_contacts += report.projected as u64;
         if report.clamped_efforts > 0 && self.c.clamped_efforts == 0 {
             tracing::warn!(
@@ -172,6 +177,11 @@ impl Server {
             "deadline_ms": self.opts.deadline.as_secs_f64() * 1e3,
             "max_penetration": c.max_penetration,
             "max_joint_error": c.max_joint_error,
+            "max_joint_angle_error": c.max_joint_angle_error,
+            "energy_initial": c.energy.initial,
+            "energy_final": c.energy.last,
+            "max_energy_rise": c.energy.max_rise,
+            "max_energy_rise_step": c.energy.max_rise_step,
             "projected_contacts": c.projected_contacts,
             "clamped_efforts": c.clamped_efforts,
             "early_matrix_steps": c.early_matrix_steps,

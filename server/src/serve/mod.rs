@@ -201,6 +201,8 @@ pub struct Counters {
     pub stepping_seconds: f64,
     pub max_penetration: f64,
     pub max_joint_error: f64,
+    pub max_joint_angle_error: f64,
+    pub energy: crate::output::EnergyTally,
     /// Contacts projected out of deep penetration (as `run` counts them).
     pub projected_contacts: u64,
     /// Joint-steps whose held effort (the controllers' net torque) its
@@ -359,7 +361,12 @@ pub fn serve(scene: &Scene, opts: ServeOptions) -> Result<(Counters, Ending, f64
         motored,
         applied_motor: scene_motor.clone(),
         scene_motor,
-        c: Counters::default(),
+        c: Counters {
+            energy: crate::output::EnergyTally::start(
+                crate::engine::measure::energy(engine.model(), engine.state()).total,
+            ),
+            ..Counters::default()
+        },
         failed_stop: false,
         final_published: false,
         frame_out: Instant::now(),

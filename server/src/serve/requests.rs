@@ -8,6 +8,13 @@ use super::{Ending, Flow, ServeError, Server};
 use cosim_shared::wire::*;
 
 impl Server {
+    /// A reset or restore put the engine in another state: the next
+    /// step's energy rise counts from it.
+    fn state_jumped(&mut self) {
+        let e = crate::engine::measure::energy(self.engine.model(), self.engine.state());
+        self.c.energy.jumped(e.total);
+    }
+
     pub(super) fn respond(&self, req: &Request, mut r: ControlResponse) {
         let s = self.engine.state();
         r.step = s.step;
@@ -245,6 +252,7 @@ impl Server {
         match r.command {
             CMD_RESET => {
                 self.engine.set_state(self.initial.clone());
+                self.state_jumped();
                 if let Some(f) = self.files.as_mut() {
                     f.logs.event("reset", step, None)?;
                 }
@@ -258,6 +266,7 @@ impl Server {
             CMD_RESTORE => match self.snapshots.get((r.count as usize).wrapping_sub(1)) {
                 Some(s) => {
                     self.engine.set_state(s.clone());
+                    self.state_jumped();
                     if let Some(f) = self.files.as_mut() {
                         f.logs.event("restore", step, Some(r.count))?;
                     }
