@@ -196,12 +196,16 @@ pub fn scene(seed: u64) -> String {
     // direction anywhere, inside a friction cone too), or between two
     // spheres at their midpoint; spherical, revolute or prismatic (a
     // random axis, half of them limited, a third with a motor) or fixed;
-    // some with a constant torque, some with `collide = false`.
+    // some with a constant torque, some with `collide = false`, a quarter
+    // of those that move with a rotor (`armature`).
     let n = centres.len();
     // The kind of each joint comes from a stream of its own, so that every
     // other draw (and so every scene of spherical joints before kinds were
     // drawn) keeps its value.
     let mut kinds = Rng::new(seed ^ 0x6a6f_696e_7473);
+    // A rotor (`armature`) on a quarter of the joints that turn or slide,
+    // from a stream of its own too.
+    let mut rotors = Rng::new(seed ^ 0x726f_746f_7273);
     for j in 0..rng.below(4) {
         let a = rng.below(n);
         let mut text = if rng.uniform() < 0.5 || n < 2 {
@@ -264,6 +268,11 @@ pub fn scene(seed: u64) -> String {
                 }
             }
             _ => text = text.replacen("type = \"spherical\"", "type = \"fixed\"", 1),
+        }
+        if kind != 3 && rotors.uniform() < 0.25 {
+            // kg m^2 (kg on a slider): from a tenth of a small sphere's
+            // inertia to several times a large one's.
+            text += &format!("armature = {:e}\n", rotors.range(1e-4, 0.05));
         }
         if kinds.uniform() < 0.25 {
             text += "collide = false\n";
@@ -438,6 +447,7 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
     };
     let mut free = Vec::new();
     let mut now = Vec::new();
+    let (mut rotor_rows, mut rotor_rates, mut rotor_inertia) = (Vec::new(), Vec::new(), Vec::new());
     let (mut j_start, mut j_inv, mut j_end) = (Vec::new(), Vec::new(), Vec::new());
     for _ in 0..steps {
         let before = energy(&m, engine.state()).midpoint;
@@ -487,6 +497,28 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
                 }
             }
         }
+        // The rotors (`armature`) are bodies of the system too: their rows
+        // at the step's start, their energy there (their rate is the
+        // joint's) and in the free motion (nothing turns them but their
+        // rows), then at the solve's velocities.
+        rotor_rows.clear();
+        rotor_rates.clear();
+        rotor_inertia.clear();
+        for j in &m.joints {
+            let before = rotor_rows.len();
+            cosim_engine::constraint::armature::push_rows(
+                j,
+                engine.state(),
+                &mut rotor_rows,
+                &mut rotor_rates,
+            );
+            rotor_inertia.extend(std::iter::repeat_n(j.armature, rotor_rows.len() - before));
+        }
+        let rotors_start: f64 = rotor_rates
+            .iter()
+            .zip(&rotor_inertia)
+            .map(|(x, i)| 0.5 * i * x * x)
+            .sum();
         let k_start: f64 = kinetic(
             &engine
                 .state()
@@ -495,8 +527,8 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
                 .map(|s| (s.v, s.w))
                 .collect::<Vec<_>>(),
             &j_start,
-        );
-        let k_free = kinetic(&free, &j_start);
+        ) + rotors_start;
+        let k_free = kinetic(&free, &j_start) + rotors_start;
         // The inputs' part of the free motion's kinetic change: all of it
         // but gravity's work `h m g . v + h^2 m |g|^2 / 2`, which the
         // midpoint energy's potential balances exactly.
@@ -537,7 +569,13 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
                 Vector3::new(c[3], c[4], c[5]),
             )
         }));
-        let k_end = kinetic(&now, &j_start);
+        let nu = engine.solved_velocities();
+        let rotors_end: f64 = rotor_rows
+            .iter()
+            .zip(&rotor_inertia)
+            .map(|(row, i)| 0.5 * i * row.velocity(nu).powi(2))
+            .sum();
+        let k_end = kinetic(&now, &j_start) + rotors_end;
         let tol = 1e-12 * (k_free.abs() + allowed.abs() + 1.0);
         let bound = k_free + r.energy_allowance;
         out.kinetic = out.kinetic.max(k_end - bound - tol);
@@ -582,7 +620,7 @@ pub fn check(text: &str, steps: u64, solver: SolverChoice) -> Result<Check, Stri
                 .zip(&engine.state().bodies)
                 .map(|(b, s)| world(&b.inertia, &s.q)),
         );
-        let turned = (kinetic(&now, &j_end) - k_end).max(0.0);
+        let turned = (kinetic(&now, &j_end) + rotors_end - k_end).max(0.0);
         allowed += k_in.max(0.0) + r.energy_allowance + support + put_to_sleep + turned;
         out.energy = out.energy.max(r.energy.midpoint - allowed - tol);
     }

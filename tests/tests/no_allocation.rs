@@ -105,8 +105,20 @@ fn hinges_sliders_and_fixed_joints_allocate_nothing_after_warm_up() {
         // stack (collision/box_box.rs).
         ("shapes.toml", cosim_shared::SolverChoice::Lemke),
         ("shapes.toml", cosim_shared::SolverChoice::Pgs),
+        // Rotors (`armature`) on the hinges: their rows among the joints'.
+        ("hinges.toml+armature", cosim_shared::SolverChoice::Lemke),
+        ("hinges.toml+armature", cosim_shared::SolverChoice::Pgs),
     ] {
-        let text = cosim_tests::shipped_scene(name);
+        let text = match name.strip_suffix("+armature") {
+            Some(file) => cosim_tests::shipped_scene(file).replace(
+                "type = \"revolute\"\n",
+                "type = \"revolute\"\narmature = 0.01\n",
+            ),
+            None => cosim_tests::shipped_scene(name),
+        };
+        if name.ends_with("+armature") {
+            assert!(text.contains("armature"), "no hinge in {name}");
+        }
         let scene = cosim_shared::Scene::parse(&text, name).expect("shipped scene");
         let mut model = Model::from_scene(&scene);
         model.params.solver = solver;

@@ -157,6 +157,9 @@ pub struct Solved {
 /// coupling per row, need not be formed); others may gain
 /// [`BUDGET_FACTOR`] times the island's stabilisation budget (a resting
 /// or sliding contact, a bounce), formed into `budget` when needed.
+///
+/// Each island's rotors (`constraint::armature`) add what their implicit
+/// coupling may give ([`Mlcp::add_rotor_work`]).
 pub fn allowances(m: &Mlcp, gain: &[f64], step: Step, budget: &mut Vec<f64>, allow: &mut Vec<f64>) {
     let round_off = round_off(step);
     let mut formed = false;
@@ -172,6 +175,7 @@ pub fn allowances(m: &Mlcp, gain: &[f64], step: Step, budget: &mut Vec<f64>, all
             BUDGET_FACTOR * budget[allow.len()] + round_off
         });
     }
+    m.add_rotor_work(step.nu_free, step.groups, allow);
 }
 
 /// The gains that are round-off of the energy sum (J): an absolute floor
@@ -367,7 +371,7 @@ pub fn solve(
     m.rhs(nu_free, contacts, p, Offsets::Islands);
     m.recover(nu_free, nu);
     let motors = if fallback.is_some() {
-        m.motor_work()
+        m.motor_work() + m.rotor_work_of(nu_free, groups, |g| scratch.mask[g])
     } else {
         0.0
     };

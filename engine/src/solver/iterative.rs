@@ -269,9 +269,11 @@ pub fn solve(
     // answer can still gain (joint_torques with PGS, step 7712: 9.8e-3 J
     // on a relaxed answer of 61 sweeps).
     m.motor_work_by_island(groups, &mut scratch.work);
+    m.add_rotor_work(step.nu_free, groups, &mut scratch.work);
     let round_off = fallback::round_off(step);
     let gains = (0..g_count)
         .any(|g| scratch.fallen[g] && scratch.relaxed_gain[g] > scratch.work[g] + round_off);
+    let rotors = |m: &Mlcp, fallen: &[bool]| m.rotor_work_of(step.nu_free, groups, |g| fallen[g]);
     if relaxed.converged && !gains {
         return Solved {
             info: PgsInfo {
@@ -280,7 +282,7 @@ pub fn solve(
             },
             fallback: Some(Fallback::Relaxed),
             energy_refused: true,
-            allowance,
+            allowance: allowance + rotors(m, &scratch.fallen),
         };
     }
     // The fallen islands from zero impulses: a descent of the kinetic
@@ -288,6 +290,8 @@ pub fn solve(
     // every impulse at once along its last change and so can climb (seed
     // 1725 with PGS, two joints on one pair: 8.6e-9 J over the bound).
     let cold = relaxed_run(solvers, m, step, nu, scratch, Relax::Fallen, true);
+    m.settle_rotors(step.minv, nu, groups, &scratch.fallen);
+    set_joint_impulses(m);
     Solved {
         info: PgsInfo {
             iterations: iterations + cold.iterations,
@@ -295,7 +299,7 @@ pub fn solve(
         },
         fallback: Some(Fallback::Relaxed),
         energy_refused: true,
-        allowance,
+        allowance: allowance + rotors(m, &scratch.fallen),
     }
 }
 

@@ -102,7 +102,15 @@ impl Mlcp {
                 self.y.push(self.w[i * r + nb + j]);
             }
         }
-        let max_diag = (0..nb).fold(0.0f64, |a, i| a.max(self.w[i * r + i]));
+        // Over the rigid rows: a rotor's row (`constraint::armature`) is
+        // never singular (its compliance), and its diagonal, a light
+        // link's inverse inertia, would scale the shift up a thousandfold
+        // (a box held by three ball joints then no longer held its
+        // contacts, `HELD`, and PGS fought the joints for them).
+        let rotors = self.armature();
+        let max_diag = (0..nb)
+            .filter(|i| !rotors.contains(i))
+            .fold(0.0f64, |a, i| a.max(self.w[i * r + i]));
 
         if nb > SMALL_BLOCK && self.mem.as_ref().is_none_or(|(cap, _)| *cap < nb) {
             let req = cholesky_in_place_scratch::<f64>(nb, Par::Seq, Default::default());
