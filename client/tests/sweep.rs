@@ -191,3 +191,22 @@ fn the_shipped_sweep_runs() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Without a scene the sweep runs the built-in reference scene, whose
+/// values it sets as a file's: two steps, twice as many steps at the
+/// finer one.
+#[test]
+fn the_reference_scenes_values_are_swept_too() {
+    let dir = temp("reference");
+    let file = dir.join("ref.toml");
+    std::fs::write(
+        &file,
+        "duration = 0.2\n[grid]\n\"sim.dt\" = [0.001, 0.002]\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    sweep(&file, &out, &[]);
+    let steps: Vec<String> = table(&out).iter().map(|r| r["steps"].clone()).collect();
+    assert_eq!(steps, ["200", "100"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -64,15 +64,12 @@ pub fn sweep(o: &Options) -> Result<(), String> {
             None => plan.runs.iter().collect(),
         };
         let runner = runner::Runner::new(&plan, o)?;
+        let asked = chosen.len();
         let todo: Vec<&Run> = chosen
             .into_iter()
             .filter(|r| o.redo || !runner.done(r))
             .collect();
-        let skipped = plan
-            .runs
-            .len()
-            .min(if o.only.is_some() { 1 } else { plan.runs.len() })
-            - todo.len();
+        let skipped = asked - todo.len();
         let parallel = o
             .parallel
             .or(plan.sweep.parallel)

@@ -14,7 +14,7 @@ use toml::{Table, Value};
 #[serde(deny_unknown_fields)]
 pub struct SweepFile {
     /// Scene (TOML), robot (URDF, MJCF), relative to the sweep file;
-    /// absent: the built-in reference scene.
+    /// absent: the built-in reference scene (its values may be set too).
     pub scene: Option<String>,
     /// Simulated seconds of each run (default: the scene's).
     pub duration: Option<f64>,

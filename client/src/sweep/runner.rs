@@ -39,7 +39,10 @@ impl<'a> Runner<'a> {
                     .map_err(|e| format!("{}: cannot read: {e}", p.display()))?,
             ),
             Some(p) if !p.exists() => return Err(format!("{}: no such scene", p.display())),
-            _ => None,
+            Some(_) => None,
+            // The server's own reference scene, whose values a sweep may
+            // set as a file's.
+            None => Some(cosim_shared::scenes::REFERENCE.to_string()),
         };
         Ok(Runner {
             plan,
@@ -80,8 +83,9 @@ impl<'a> Runner<'a> {
         std::fs::write(dir.join("params.json"), params_json(run))
             .map_err(|e| format!("params.json: {e}"))?;
         let scene: Option<PathBuf> = match (&self.scene_text, self.plan.scene()) {
-            (Some(t), Some(p)) => {
-                let parent = p.parent().filter(|d| !d.as_os_str().is_empty());
+            (Some(t), p) => {
+                let parent = p.as_deref().and_then(Path::parent);
+                let parent = parent.filter(|d| !d.as_os_str().is_empty());
                 let parent = parent.unwrap_or(Path::new("."));
                 let base = std::fs::canonicalize(parent).unwrap_or(parent.to_path_buf());
                 let text = scene_with(t, &base, run)?;
@@ -89,7 +93,7 @@ impl<'a> Runner<'a> {
                 std::fs::write(&input, text).map_err(|e| format!("input.toml: {e}"))?;
                 Some(input)
             }
-            (_, p) => p,
+            (None, p) => p,
         };
         let s = &self.plan.sweep;
         let outputs = dir.join("out");
