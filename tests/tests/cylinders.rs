@@ -1,6 +1,6 @@
-//! Cylinders (issue 45, point 2): exact against planes and balls, and on
-//! a box's or hull's face; elsewhere against boxes, capsules, hulls and
-//! cylinders their prism (`Hull::cylinder`, 32 sides).
+//! Cylinders (issue 45, point 2): exact against planes, balls and
+//! capsules, and on a box's or hull's face; elsewhere against boxes, hulls
+//! and cylinders their prism (`Hull::cylinder`, 32 sides).
 
 use cosim_server::engine::{ImpulseKind, Party};
 use cosim_tests::*;
@@ -122,6 +122,79 @@ fn a_ball_meets_a_cylinders_true_surface() {
         closest = closest.min(d);
     });
     assert!((closest - (r + rb)).abs() < 1e-6, "closest {closest}");
+}
+
+/// A capsule meets the true surface too (its balls against the
+/// cylinder's, not a prism's): lying on a standing cylinder's top end it
+/// rests on both end balls at `2 l + rc`; pressed (zero gravity) against a
+/// post's side between two of the prism's corners, upright beside it or
+/// crossing it, it stops with its axis `r + rc` from the post's (the
+/// prism: up to r (1 - cos(pi / 32)) = 4.8e-4 m nearer).
+#[test]
+fn a_capsule_meets_a_cylinders_true_surface() {
+    let (r, l, rc, lc) = (0.1, 0.2, 0.03, 0.05);
+    let half = std::f64::consts::FRAC_1_SQRT_2;
+    let lying = [half, 0.0, half, 0.0]; // its axis along x
+    let s = sim(1e-3, 500, [0.0, 0.0, -G])
+        + FLOOR
+        + &standing("can", (r, l), l)
+        + &capsule(
+            "pill",
+            rc,
+            lc,
+            1.0,
+            [0.02, 0.0, 2.0 * l + rc],
+            lying,
+            [0.0; 3],
+            [0.0; 3],
+            0.5,
+        );
+    let mut e = engine(&s);
+    let mut touches = 0;
+    run(&mut e, 500, |e, _| {
+        touches = e
+            .impulses()
+            .iter()
+            .filter(|i| {
+                i.kind == ImpulseKind::Normal && (i.a == Party::Body(1) || i.b == Party::Body(1))
+            })
+            .count();
+    });
+    let z = e.state().bodies[1].x.z;
+    assert!((z - (2.0 * l + rc)).abs() < 1e-6, "the capsule at {z}");
+    assert!(touches >= 2, "on {touches} points of the can's end");
+    let t = 0.5 * std::f64::consts::TAU / 32.0;
+    let dir = Vector3::new(t.cos(), t.sin(), 0.0);
+    let across = Vector3::z().cross(&dir);
+    // Upright (axis along z), then crossing (axis level, across `dir`).
+    let crossing = UnitQuaternion::rotation_between(&Vector3::z(), &across).expect("a turn");
+    let crossing = [crossing.w, crossing.i, crossing.j, crossing.k];
+    for q in [[1.0, 0.0, 0.0, 0.0], crossing] {
+        let start = dir * (r + rc + 0.01);
+        let s = sim(1e-3, 300, [0.0; 3])
+            + &standing("post", (r, l), 0.0)
+            + &capsule(
+                "pill",
+                rc,
+                lc,
+                1.0,
+                start.into(),
+                q,
+                (-dir * 0.1).into(),
+                [0.0; 3],
+                0.0,
+            );
+        let mut e = engine(&s);
+        let mut closest = f64::INFINITY;
+        run(&mut e, 300, |e, _| {
+            let s = e.state();
+            closest = closest.min((s.bodies[1].x - s.bodies[0].x).xy().norm());
+        });
+        assert!(
+            (closest - (r + rc)).abs() < 1e-6,
+            "{q:?}: closest {closest}"
+        );
+    }
 }
 
 /// A box 0.6 x 0.6 x 0.2 on the floor, its top at z = 0.2: a table.

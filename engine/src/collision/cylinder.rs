@@ -1,6 +1,7 @@
 //! A cylinder (about its shape's z axis, radius `r`, flat ends at `+-l`)
-//! against a plane and a ball, in closed form; against boxes, capsules,
-//! hulls and cylinders it is its prism (`model/hull.rs`,
+//! against a plane, a ball and a capsule, in closed form (a capsule as
+//! balls along its segment, [`capsule_cylinder`]); against boxes, hulls
+//! and cylinders it is its prism (`model/hull.rs`,
 //! `Hull::cylinder`), as `hull.rs` takes any hull, except where a box's
 //! or hull's face carries it ([`on_face`]): there its rim points on the
 //! face's plane, as on a plane, so that a can standing or lying on a
@@ -225,4 +226,27 @@ pub fn ball_cylinder(
 ) -> Geometry {
     let found = surface(r, l, &pose.local(&c));
     super::sphere_box::ball_on_surface((a, radius, offset), b, pose, found, feature)
+}
+
+/// A capsule (body A at `pa`, radius `rc`, half length `lc`) against a
+/// cylinder (body B at `pb`): its end balls and, where a point inside its
+/// segment is nearer, the ball there, each against the cylinder's true
+/// surface (`capsule_box::capsule_against`: the signed distance to a
+/// convex body is convex along the segment). Lying on an end or along the
+/// side, the two end balls hold it on a line; crossed, the inner ball.
+#[allow(clippy::too_many_arguments)]
+pub fn capsule_cylinder(
+    a: usize,
+    pa: &Pose,
+    (rc, lc): (f64, f64),
+    b: usize,
+    pb: &Pose,
+    (r, l): (f64, f64),
+    within: f64,
+    out: &mut Vec<Geometry>,
+) {
+    let distance = |p: &Vector3<f64>| surface(r, l, p).0;
+    let ball =
+        |c: Vector3<f64>, feature| ball_cylinder(a, c, rc, Some(c - pa.x), b, pb, (r, l), feature);
+    super::capsule_box::capsule_against(pa, lc, pb, distance, ball, within, out);
 }

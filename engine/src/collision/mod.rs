@@ -357,6 +357,15 @@ fn shape_pair(
                 radius,
                 half_length,
             },
+            Hull {
+                cylinder: Some(rl), ..
+            },
+        ) => cylinder::capsule_cylinder(a, &pa, (radius, half_length), b, &pb, rl, within, out),
+        (
+            Capsule {
+                radius,
+                half_length,
+            },
             Hull { index, .. },
         ) => hull::capsule_hull(
             a,
