@@ -50,6 +50,7 @@
 mod energy;
 mod recover;
 mod restrict;
+mod rotors;
 mod schur;
 
 /// Dense Cholesky and triangular solves for small blocks (the joint
