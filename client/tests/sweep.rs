@@ -210,3 +210,34 @@ fn the_reference_scenes_values_are_swept_too() {
     assert_eq!(steps, ["200", "100"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A run that cannot be made (a value set on a body the scene does not
+/// have) fails alone: its line says why, the others run, and the sweep
+/// exits with 1 so that a scheduler sees it.
+#[test]
+fn a_failed_run_is_said_in_its_line_and_the_exit_status() {
+    let dir = temp("failed");
+    let file = dir.join("bad.toml");
+    std::fs::write(
+        &file,
+        "duration = 0.1\n[[run]]\n\"sim.dt\" = 0.001\n[[run]]\n\"body.nobody.mass\" = 2.0\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = Command::new(EXE)
+        .arg("sweep")
+        .arg(&file)
+        .arg("--out")
+        .arg(&out)
+        .arg("--server")
+        .arg(server())
+        .output()
+        .expect("cosim sweep");
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("1 of 2 runs did not end well: [1]"), "{err}");
+    let rows = table(&out);
+    assert_eq!(rows[0]["status"], "ok");
+    assert!(rows[1]["status"].contains("no body named"), "{rows:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -111,10 +111,19 @@ pub fn sweep(o: &Options) -> Result<(), String> {
             todo.len(),
             start.elapsed().as_secs_f64()
         );
-        let failed = failed.into_inner().unwrap_or_else(|e| e.into_inner());
+        let mut failed = failed.into_inner().unwrap_or_else(|e| e.into_inner());
+        failed.sort_unstable();
+        let path = table::write(&plan, &o.out)?;
+        eprintln!("sweep: table {}", path.display());
+        // A scheduler (a Slurm array, Ray) tells a failed task by its exit.
         if !failed.is_empty() {
-            eprintln!("sweep: runs that did not end well: {failed:?} (see their folders' logs)");
+            return Err(format!(
+                "{} of {} runs did not end well: {failed:?} (their lines in the table and their folders' logs say why)",
+                failed.len(),
+                asked
+            ));
         }
+        return Ok(());
     }
     let path = table::write(&plan, &o.out)?;
     eprintln!("sweep: table {}", path.display());

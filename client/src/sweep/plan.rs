@@ -179,7 +179,7 @@ pub fn text(v: &Value) -> String {
 pub fn scene_with(scene: &str, dir: &Path, run: &Run) -> Result<String, String> {
     let mut doc: Table = toml::from_str(scene).map_err(|e| format!("the scene: {e}"))?;
     for (key, value) in run.params.iter().filter(|(k, _)| k.contains('.')) {
-        set(&mut doc, key, value.clone()).map_err(|e| format!("run {}: {key}: {e}", run.index))?;
+        set(&mut doc, key, value.clone()).map_err(|e| format!("{key}: {e}"))?;
     }
     if let Some(Value::Array(robots)) = doc.get_mut("robot") {
         for r in robots.iter_mut() {
@@ -302,9 +302,6 @@ mod tests {
             params: vec![("body.c.mass".into(), Value::Float(1.0))],
         };
         let e = scene_with(scene, Path::new("/x"), &bad).unwrap_err();
-        assert!(
-            e.contains("run 3") && e.contains("no body named \"c\""),
-            "{e}"
-        );
+        assert!(e.contains("body.c.mass: no body named \"c\""), "{e}");
     }
 }
