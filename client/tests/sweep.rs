@@ -23,7 +23,9 @@ fn server() -> PathBuf {
     exe
 }
 
-fn sweep(file: &Path, out: &Path, extra: &[&str]) -> String {
+/// `cosim sweep FILE --out OUT` with `extra`: its exit status and what it
+/// said.
+fn run_sweep(file: &Path, out: &Path, extra: &[&str]) -> (std::process::ExitStatus, String) {
     let o = Command::new(EXE)
         .arg("sweep")
         .arg(file)
@@ -34,8 +36,13 @@ fn sweep(file: &Path, out: &Path, extra: &[&str]) -> String {
         .args(extra)
         .output()
         .expect("cosim sweep");
-    let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(o.status.success(), "cosim sweep: {err}");
+    (o.status, String::from_utf8_lossy(&o.stderr).into_owned())
+}
+
+/// [`run_sweep`] that must succeed: what it said.
+fn sweep(file: &Path, out: &Path, extra: &[&str]) -> String {
+    let (status, err) = run_sweep(file, out, extra);
+    assert!(status.success(), "cosim sweep: {err}");
     err
 }
 
@@ -224,17 +231,8 @@ fn a_failed_run_is_said_in_its_line_and_the_exit_status() {
     )
     .unwrap();
     let out = dir.join("out");
-    let o = Command::new(EXE)
-        .arg("sweep")
-        .arg(&file)
-        .arg("--out")
-        .arg(&out)
-        .arg("--server")
-        .arg(server())
-        .output()
-        .expect("cosim sweep");
-    assert_eq!(o.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&o.stderr);
+    let (status, err) = run_sweep(&file, &out, &[]);
+    assert_eq!(status.code(), Some(1));
     assert!(err.contains("1 of 2 runs did not end well: [1]"), "{err}");
     let rows = table(&out);
     assert_eq!(rows[0]["status"], "ok");

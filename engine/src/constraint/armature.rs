@@ -30,25 +30,10 @@ use nalgebra::Vector3;
 /// Appends the rotor's rows of `joint` (`Joint::armature_rows` of them)
 /// and their constant terms `-x'_n`.
 pub fn push_rows(joint: &Joint, state: &State, rows: &mut Vec<Row>, offset: &mut Vec<f64>) {
-    let n = joint.armature_rows();
-    if n == 0 {
-        return;
-    }
-    let mut push = |row: Row| {
+    each_row(joint, state, |row| {
         offset.push(-row.state_velocity(state));
         rows.push(row);
-    };
-    if matches!(joint.turning, Turning::Free) {
-        for k in 0..3 {
-            push(Row::turning(
-                Vector3::ith(k, 1.0),
-                body(joint.a),
-                body(joint.b),
-            ));
-        }
-    } else if let Some(row) = rate_row(joint, state) {
-        push(row);
-    }
+    });
 }
 
 /// The compliance of the rotor's rows, `1 / I_a`.
@@ -56,16 +41,31 @@ pub fn compliance(joint: &Joint) -> f64 {
     1.0 / joint.armature
 }
 
-/// The rotor's kinetic energy in `state`, `I_a |x'|^2 / 2` (J).
+/// The rotor's kinetic energy in `state`, `I_a |x'|^2 / 2` (J), its rate
+/// read on its rows, as the energy check reads it (`Mlcp::rotor_change`).
 pub fn energy(joint: &Joint, state: &State) -> f64 {
-    if joint.armature_rows() == 0 {
-        return 0.0;
-    }
-    let rate2 = if matches!(joint.turning, Turning::Free) {
-        let w = |side| body(side).map_or(Vector3::zeros(), |i| state.bodies[i].w);
-        (w(joint.b) - w(joint.a)).norm_squared()
-    } else {
-        rate_row(joint, state).map_or(0.0, |row| row.state_velocity(state).powi(2))
-    };
+    let mut rate2 = 0.0;
+    each_row(joint, state, |row| {
+        rate2 += row.state_velocity(state).powi(2)
+    });
     0.5 * joint.armature * rate2
+}
+
+/// Each of the rotor's rows (none without armature): the coordinate's
+/// rate row, or a spherical joint's three relative spin rows.
+fn each_row(joint: &Joint, state: &State, mut f: impl FnMut(Row)) {
+    if joint.armature_rows() == 0 {
+        return;
+    }
+    if matches!(joint.turning, Turning::Free) {
+        for k in 0..3 {
+            f(Row::turning(
+                Vector3::ith(k, 1.0),
+                body(joint.a),
+                body(joint.b),
+            ));
+        }
+    } else if let Some(row) = rate_row(joint, state) {
+        f(row);
+    }
 }
