@@ -169,6 +169,36 @@ impl Connection {
         }
     }
 
+    /// Sends `req` exactly as given and wakes the server; the caller reads
+    /// the responses. A link (`cosim-link`) forwards another host's
+    /// client's requests with it: the server binds what they do to this
+    /// connection's node, one per remote client.
+    pub fn forward(
+        &self,
+        req: ControlRequest,
+    ) -> Result<
+        iceoryx2::pending_response::PendingResponse<
+            ipc::Service,
+            ControlRequest,
+            (),
+            ControlResponse,
+            (),
+        >,
+        ClientError,
+    > {
+        let pending = self
+            .control
+            .send_copy(req)
+            .map_err(|e| ipc("cannot send a control request")(&e))?;
+        self.wake_server();
+        Ok(pending)
+    }
+
+    /// Wakes the server (it also polls): after an input or a request.
+    pub fn wake_server(&self) {
+        let _ = self.wake.notify();
+    }
+
     /// Sends a command without data.
     pub fn command(&self, command: u32) -> Result<ControlResponse, ClientError> {
         self.request(

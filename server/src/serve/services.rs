@@ -345,6 +345,22 @@ impl Services {
         found
     }
 
+    /// The nodes of every control client and input publisher, each once
+    /// (`cosim-link`'s mirror tells a remote client gone by them).
+    pub fn client_nodes(&self, out: &mut Vec<u128>) {
+        out.clear();
+        self.control_service.dynamic_config().list_clients(|c| {
+            out.push(c.node_id.value());
+            CallbackProgression::Continue
+        });
+        self.input_service.dynamic_config().list_publishers(|p| {
+            out.push(p.node_id.value());
+            CallbackProgression::Continue
+        });
+        out.sort_unstable();
+        out.dedup();
+    }
+
     /// The next control request.
     pub fn receive_request(&self) -> Result<Option<Request>, ServiceError> {
         self.control
