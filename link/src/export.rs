@@ -11,19 +11,17 @@ use cosim_client::{Connection, Monitor};
 use cosim_shared::wire::*;
 use iceoryx2::prelude::*;
 use std::collections::HashMap;
-use std::sync::mpsc::{channel, Receiver, RecvTimeoutError};
+use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, TryRecvError};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use zenoh::Wait;
 
-type Pending = iceoryx2::pending_response::PendingResponse<
-    ipc::Service,
-    ControlRequest,
-    (),
-    ControlResponse,
-    (),
->;
-type InputPublisher = iceoryx2::port::publisher::Publisher<ipc::Service, [u64], InputHeader>;
+/// iceoryx2's ports locked for use from Zenoh's threads: a remote input
+/// is published to the server from the callback that receives it.
+type Ts = ipc_threadsafe::Service;
+type Pending =
+    iceoryx2::pending_response::PendingResponse<Ts, ControlRequest, (), ControlResponse, ()>;
+type InputPublisher = iceoryx2::port::publisher::Publisher<Ts, [u64], InputHeader>;
 
 /// How `export` runs.
 #[derive(Debug, Clone)]
@@ -65,25 +63,53 @@ pub fn frame_words(bodies: u32, joints: u32) -> u64 {
     13 * b + 5 * u64::from(joints) + 8 * (4 * b + 64)
 }
 
-/// What reaches the exporter's loop.
-enum Event {
-    Up(String, Box<Message>),
-    ImporterGone(String),
-    ServerGone,
+fn service<T>(
+    node: &Node<Ts>,
+    service: &str,
+    open: impl FnOnce(iceoryx2::service::builder::Builder<Ts>) -> Result<T, LinkError>,
+) -> Result<T, LinkError> {
+    let name: ServiceName = service
+        .try_into()
+        .map_err(local_err(format!("service name {service}")))?;
+    open(node.service_builder(&name))
 }
 
-/// One remote client's stand-in on the server's host.
+/// One remote client's stand-in on the server's host: a node of its own,
+/// so that the server binds the client's slot to it.
 struct Proxy {
-    conn: Connection,
+    node: Node<Ts>,
+    control: iceoryx2::port::client::Client<Ts, ControlRequest, (), ControlResponse, ()>,
+    wake: iceoryx2::port::notifier::Notifier<Ts>,
     input: Option<InputPublisher>,
     pending: Vec<(u64, Pending)>,
 }
 
 impl Proxy {
     fn open(name: &str) -> Result<Proxy, LinkError> {
-        let conn = Connection::connect(name).map_err(local_err("cannot reach the server"))?;
+        let node = cosim_client::domain::node()
+            .map_err(local_err("cannot read the domain"))?
+            .create::<Ts>()
+            .map_err(local_err("cannot create a proxy's node"))?;
+        let control = service(&node, &services::control(name), |b| {
+            b.request_response::<ControlRequest, ControlResponse>()
+                .open()
+                .map_err(local_err("cannot open the server's control service"))?
+                .client_builder()
+                .create()
+                .map_err(local_err("cannot create a control client"))
+        })?;
+        let wake = service(&node, &services::wake(name), |b| {
+            b.event()
+                .open()
+                .map_err(local_err("cannot open the server's wake-up event"))?
+                .notifier_builder()
+                .create()
+                .map_err(local_err("cannot create a notifier"))
+        })?;
         Ok(Proxy {
-            conn,
+            node,
+            control,
+            wake,
             input: None,
             pending: Vec::new(),
         })
@@ -94,31 +120,180 @@ impl Proxy {
     /// first input.
     fn input(&mut self, name: &str) -> Result<&InputPublisher, LinkError> {
         if self.input.is_none() {
-            let service = services::input(name);
-            let publisher = self
-                .conn
-                .node()
-                .service_builder(
-                    &service
-                        .as_str()
-                        .try_into()
-                        .map_err(local_err(format!("service name {service}")))?,
-                )
-                .publish_subscribe::<[u64]>()
-                .user_header::<InputHeader>()
-                .open()
-                .map_err(local_err(format!("cannot open {service}")))?
-                .publisher_builder()
-                .initial_max_slice_len(64)
-                .allocation_strategy(AllocationStrategy::PowerOfTwo)
-                .create()
-                .map_err(local_err("cannot publish inputs"))?;
+            let publisher = service(&self.node, &services::input(name), |b| {
+                b.publish_subscribe::<[u64]>()
+                    .user_header::<InputHeader>()
+                    .open()
+                    .map_err(local_err("cannot open the server's inputs"))?
+                    .publisher_builder()
+                    .initial_max_slice_len(64)
+                    .allocation_strategy(AllocationStrategy::PowerOfTwo)
+                    .create()
+                    .map_err(local_err("cannot publish inputs"))
+            })?;
             self.input = Some(publisher);
         }
         self.input
             .as_ref()
             .ok_or_else(|| local_err::<&str>("no input publisher")("unreachable"))
     }
+
+    /// An input's header and words published, then the server woken.
+    fn send_input(&mut self, name: &str, bytes: &[u8], words: &mut Vec<u64>) -> Result<(), String> {
+        let (header, rest) =
+            message::take_struct::<InputHeader>(bytes).ok_or("shorter than its header")?;
+        message::take_words(rest, words).ok_or("not whole words")?;
+        let publisher = self.input(name).map_err(|e| e.to_string())?;
+        send_words(publisher, header, words.len(), |w| {
+            for &x in words.iter() {
+                w.put(x);
+            }
+        })
+        .map_err(|e| format!("{e:?}"))?;
+        let _ = self.wake.notify();
+        Ok(())
+    }
+}
+
+/// The proxies and the publishers of responses, shared by Zenoh's
+/// callbacks and the loop that collects responses.
+struct Proxies {
+    name: String,
+    keys: Keys,
+    session: zenoh::Session,
+    by_client: HashMap<(String, u128), Proxy>,
+    downs: HashMap<String, zenoh::pubsub::Publisher<'static>>,
+    words: Vec<u64>,
+}
+
+impl Proxies {
+    /// What importer `zid` sent, done; true when a request is now out.
+    fn take(&mut self, zid: &str, m: Message) -> Result<bool, LinkError> {
+        let key = (zid.to_string(), m.client());
+        if let Message::Gone { client } = m {
+            if self.by_client.remove(&key).is_some() {
+                tracing::info!("client {client:032x} of importer {zid} is gone");
+            }
+            return Ok(false);
+        }
+        if !self.by_client.contains_key(&key) {
+            self.by_client.insert(key.clone(), Proxy::open(&self.name)?);
+        }
+        let Some(proxy) = self.by_client.get_mut(&key) else {
+            return Ok(false);
+        };
+        match m {
+            Message::Input { bytes, .. } => {
+                if let Err(e) = proxy.send_input(&self.name, &bytes, &mut self.words) {
+                    tracing::warn!("an input of importer {zid} not forwarded: {e}");
+                }
+                Ok(false)
+            }
+            Message::Request { seq, request, .. } => {
+                if request.command == CMD_JOIN {
+                    proxy.input(&self.name)?;
+                }
+                match proxy.control.send_copy(request) {
+                    Ok(p) => {
+                        proxy.pending.push((seq, p));
+                        let _ = proxy.wake.notify();
+                        Ok(true)
+                    }
+                    Err(e) => {
+                        tracing::warn!("a request not forwarded: {e:?}");
+                        let end = Message::End { client: key.1, seq };
+                        self.down(zid)?
+                            .put(end.encode())
+                            .wait()
+                            .map_err(zenoh_err("cannot answer an importer"))?;
+                        Ok(false)
+                    }
+                }
+            }
+            _ => Ok(false),
+        }
+    }
+
+    /// Importer `zid` is gone: its proxies let go.
+    fn importer_gone(&mut self, zid: &str) {
+        let before = self.by_client.len();
+        self.by_client.retain(|(z, _), _| z != zid);
+        self.downs.remove(zid);
+        tracing::info!(
+            "importer {zid} is gone: {} of its clients let go",
+            before - self.by_client.len()
+        );
+    }
+
+    /// Importer `zid`'s publisher of responses.
+    fn down(&mut self, zid: &str) -> Result<&zenoh::pubsub::Publisher<'static>, LinkError> {
+        if !self.downs.contains_key(zid) {
+            let p = self
+                .session
+                .declare_publisher(self.keys.down(zid))
+                .congestion_control(zenoh::qos::CongestionControl::Block)
+                .priority(zenoh::qos::Priority::RealTime)
+                .express(true)
+                .wait()
+                .map_err(zenoh_err("cannot declare a response publisher"))?;
+            self.downs.insert(zid.to_string(), p);
+        }
+        self.downs
+            .get(zid)
+            .ok_or_else(|| local_err::<&str>("response publisher")("missing"))
+    }
+
+    /// The responses that arrived sent on; true while requests are out.
+    fn collect(&mut self) -> Result<bool, LinkError> {
+        let mut out = Vec::new();
+        for ((zid, client), proxy) in self.by_client.iter_mut() {
+            proxy.pending.retain(|(seq, pending)| {
+                // NOTE: whether the server still holds the request is read
+                // before draining, as the client library does: a response
+                // sent just before the request is let go is then drained.
+                let connected =
+                    pending.is_connected() && pending.number_of_server_connections() > 0;
+                loop {
+                    match pending.receive() {
+                        Ok(Some(r)) => out.push((
+                            zid.clone(),
+                            Message::Response {
+                                client: *client,
+                                seq: *seq,
+                                response: *r.payload(),
+                            },
+                        )),
+                        Ok(None) => break,
+                        Err(e) => {
+                            tracing::warn!("cannot receive a response: {e:?}");
+                            break;
+                        }
+                    }
+                }
+                if !connected {
+                    let end = Message::End {
+                        client: *client,
+                        seq: *seq,
+                    };
+                    out.push((zid.clone(), end));
+                }
+                connected
+            });
+        }
+        for (zid, m) in out {
+            self.down(&zid)?
+                .put(m.encode())
+                .wait()
+                .map_err(zenoh_err("cannot answer an importer"))?;
+        }
+        Ok(self.by_client.values().any(|p| !p.pending.is_empty()))
+    }
+}
+
+/// What wakes the loop that collects responses.
+enum Event {
+    Requested,
+    ServerGone,
 }
 
 /// Runs the exporting half until the server is gone; `listening` is told
@@ -139,6 +314,14 @@ pub fn export(opts: &ExportOptions, listening: impl FnOnce(&[String])) -> Result
         .wait()
         .map_err(zenoh_err("cannot declare the liveliness token"))?;
     let (tx, rx) = channel::<Event>();
+    let proxies = Arc::new(Mutex::new(Proxies {
+        name: opts.name.clone(),
+        keys: keys.clone(),
+        session: z.clone(),
+        by_client: HashMap::new(),
+        downs: HashMap::new(),
+        words: Vec::new(),
+    }));
 
     let told = hello.clone();
     let _hello = z
@@ -153,33 +336,43 @@ pub fn export(opts: &ExportOptions, listening: impl FnOnce(&[String])) -> Result
         .wait()
         .map_err(zenoh_err("cannot declare the hello queryable"))?;
 
-    let up_tx = tx.clone();
-    let up_keys = keys.clone();
+    // Inputs go to the server from Zenoh's receiving thread: no hand-over
+    // to another thread on the lockstep's path.
+    let (up_tx, up_keys, up_proxies) = (tx.clone(), keys.clone(), proxies.clone());
     let _up = z
         .declare_subscriber(keys.up_all())
         .callback(move |sample| {
             let Some(zid) = up_keys.up_of(sample.key_expr().as_str()) else {
                 return;
             };
-            match Message::decode(&sample.payload().to_bytes()) {
-                Some(m) => {
-                    let _ = up_tx.send(Event::Up(zid.to_string(), Box::new(m)));
+            let Some(m) = Message::decode(&sample.payload().to_bytes()) else {
+                tracing::warn!("a message from importer {zid} that is not one; ignored");
+                return;
+            };
+            let Ok(mut p) = up_proxies.lock() else {
+                return;
+            };
+            match p.take(zid, m) {
+                Ok(true) => {
+                    let _ = up_tx.send(Event::Requested);
                 }
-                None => tracing::warn!("a message from importer {zid} that is not one; ignored"),
+                Ok(false) => {}
+                Err(e) => tracing::warn!("importer {zid}: {e}"),
             }
         })
         .wait()
         .map_err(zenoh_err("cannot subscribe to the importers"))?;
 
-    let gone_tx = tx.clone();
-    let gone_keys = keys.clone();
+    let (gone_keys, gone_proxies) = (keys.clone(), proxies.clone());
     let _importers = z
         .liveliness()
         .declare_subscriber(keys.importer_all())
         .callback(move |sample| {
             if sample.kind() == zenoh::sample::SampleKind::Delete {
                 if let Some(zid) = gone_keys.importer_of(sample.key_expr().as_str()) {
-                    let _ = gone_tx.send(Event::ImporterGone(zid.to_string()));
+                    if let Ok(mut p) = gone_proxies.lock() {
+                        p.importer_gone(zid);
+                    }
                 }
             }
         })
@@ -196,13 +389,42 @@ pub fn export(opts: &ExportOptions, listening: impl FnOnce(&[String])) -> Result
     };
     listening(&session::listening(&opts.endpoints));
     tracing::info!("exporting server '{}'", opts.name);
-    let served = serve_remote(&z, &keys, &opts.name, &rx);
+    let served = collect_responses(&proxies, &rx);
     drop(conn);
     let forwarded = states
         .join()
         .map_err(|_| local_err::<&str>("the state thread")("panicked"))?;
+    if let Ok(mut p) = proxies.lock() {
+        p.by_client.clear();
+    }
     let _ = z.close().wait();
     served.and(forwarded)
+}
+
+/// The server's responses sent to the importers while requests are out,
+/// until the server is gone.
+fn collect_responses(proxies: &Mutex<Proxies>, rx: &Receiver<Event>) -> Result<(), LinkError> {
+    let mut out = false;
+    loop {
+        let event = if out {
+            // A request is answered within microseconds: poll until done.
+            std::thread::sleep(Duration::from_micros(20));
+            rx.try_recv().map_err(|e| match e {
+                TryRecvError::Empty => RecvTimeoutError::Timeout,
+                TryRecvError::Disconnected => RecvTimeoutError::Disconnected,
+            })
+        } else {
+            rx.recv_timeout(Duration::from_millis(200))
+        };
+        match event {
+            Ok(Event::ServerGone) | Err(RecvTimeoutError::Disconnected) => return Ok(()),
+            Ok(Event::Requested) | Err(RecvTimeoutError::Timeout) => {}
+        }
+        out = match proxies.lock() {
+            Ok(mut p) => p.collect()?,
+            Err(_) => return Err(local_err::<&str>("the proxies")("poisoned")),
+        };
+    }
 }
 
 /// Every frame of the server, in order, published to the importers; ends
@@ -243,169 +465,4 @@ fn forward_states(
             .wait()
             .map_err(zenoh_err("cannot publish a state frame"))?;
     }
-}
-
-/// The importers' inputs and requests played to the server by their
-/// proxies, and the responses sent back, until the server is gone.
-fn serve_remote(
-    z: &zenoh::Session,
-    keys: &Keys,
-    name: &str,
-    rx: &Receiver<Event>,
-) -> Result<(), LinkError> {
-    let mut proxies: HashMap<(String, u128), Proxy> = HashMap::new();
-    let mut downs: HashMap<String, zenoh::pubsub::Publisher<'static>> = HashMap::new();
-    let mut words = Vec::new();
-    loop {
-        // Responses are polled while requests are out; otherwise the loop
-        // sleeps until an importer sends something.
-        let waiting = proxies.values().any(|p| !p.pending.is_empty());
-        let timeout = if waiting {
-            Duration::from_micros(20)
-        } else {
-            Duration::from_millis(200)
-        };
-        match rx.recv_timeout(timeout) {
-            Ok(Event::ServerGone) | Err(RecvTimeoutError::Disconnected) => return Ok(()),
-            Ok(Event::ImporterGone(zid)) => {
-                let before = proxies.len();
-                proxies.retain(|(z, _), _| *z != zid);
-                downs.remove(&zid);
-                tracing::info!(
-                    "importer {zid} is gone: {} of its clients let go",
-                    before - proxies.len()
-                );
-            }
-            Ok(Event::Up(zid, m)) if matches!(*m, Message::Gone { .. }) => {
-                let client = m.client();
-                if proxies.remove(&(zid.clone(), client)).is_some() {
-                    tracing::info!("client {client:032x} of importer {zid} is gone");
-                }
-            }
-            Ok(Event::Up(zid, m)) => {
-                let key = (zid, m.client());
-                if !proxies.contains_key(&key) {
-                    proxies.insert(key.clone(), Proxy::open(name)?);
-                }
-                let Some(proxy) = proxies.get_mut(&key) else {
-                    continue;
-                };
-                match *m {
-                    Message::Input { bytes, .. } => {
-                        if let Err(e) = send_input(proxy, name, &bytes, &mut words) {
-                            tracing::warn!("an input of importer {} not forwarded: {e}", key.0);
-                        }
-                    }
-                    Message::Request { seq, request, .. } => {
-                        if request.command == CMD_JOIN {
-                            proxy.input(name)?;
-                        }
-                        match proxy.conn.forward(request) {
-                            Ok(p) => proxy.pending.push((seq, p)),
-                            Err(e) => {
-                                tracing::warn!("a request not forwarded: {e}");
-                                down(z, keys, &mut downs, &key.0)?
-                                    .put(Message::End { client: key.1, seq }.encode())
-                                    .wait()
-                                    .map_err(zenoh_err("cannot answer an importer"))?;
-                            }
-                        }
-                    }
-                    _ => {}
-                }
-            }
-            Err(RecvTimeoutError::Timeout) => {}
-        }
-        for ((zid, client), proxy) in proxies.iter_mut() {
-            if proxy.pending.is_empty() {
-                continue;
-            }
-            let publisher = down(z, keys, &mut downs, zid)?;
-            let mut error = None;
-            proxy.pending.retain(|(seq, pending)| {
-                // NOTE: whether the server still holds the request is read
-                // before draining, as the client library does: a response
-                // sent just before the request is let go is then drained.
-                let connected =
-                    pending.is_connected() && pending.number_of_server_connections() > 0;
-                loop {
-                    match pending.receive() {
-                        Ok(Some(r)) => {
-                            let m = Message::Response {
-                                client: *client,
-                                seq: *seq,
-                                response: *r.payload(),
-                            };
-                            if let Err(e) = publisher.put(m.encode()).wait() {
-                                error = Some(e);
-                            }
-                        }
-                        Ok(None) => break,
-                        Err(e) => {
-                            tracing::warn!("cannot receive a response: {e:?}");
-                            break;
-                        }
-                    }
-                }
-                if connected {
-                    return true;
-                }
-                let end = Message::End {
-                    client: *client,
-                    seq: *seq,
-                };
-                if let Err(e) = publisher.put(end.encode()).wait() {
-                    error = Some(e);
-                }
-                false
-            });
-            if let Some(e) = error {
-                return Err(zenoh_err("cannot answer an importer")(e));
-            }
-        }
-    }
-}
-
-/// Importer `zid`'s publisher of responses.
-fn down<'a>(
-    z: &zenoh::Session,
-    keys: &Keys,
-    downs: &'a mut HashMap<String, zenoh::pubsub::Publisher<'static>>,
-    zid: &str,
-) -> Result<&'a zenoh::pubsub::Publisher<'static>, LinkError> {
-    if !downs.contains_key(zid) {
-        let p = z
-            .declare_publisher(keys.down(zid))
-            .congestion_control(zenoh::qos::CongestionControl::Block)
-            .priority(zenoh::qos::Priority::RealTime)
-            .express(true)
-            .wait()
-            .map_err(zenoh_err("cannot declare a response publisher"))?;
-        downs.insert(zid.to_string(), p);
-    }
-    downs
-        .get(zid)
-        .ok_or_else(|| local_err::<&str>("response publisher")("missing"))
-}
-
-/// An input's header and words published by the proxy, then the server
-/// woken.
-fn send_input(
-    proxy: &mut Proxy,
-    name: &str,
-    bytes: &[u8],
-    words: &mut Vec<u64>,
-) -> Result<(), String> {
-    let (header, rest) =
-        message::take_struct::<InputHeader>(bytes).ok_or("shorter than its header")?;
-    message::take_words(rest, words).ok_or("not whole words")?;
-    let publisher = proxy.input(name).map_err(|e| e.to_string())?;
-    send_words(publisher, header, words.len(), |w| {
-        for &x in words.iter() {
-            w.put(x);
-        }
-    })
-    .map_err(|e| format!("{e:?}"))?;
-    proxy.conn.wake_server();
-    Ok(())
 }

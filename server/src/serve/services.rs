@@ -14,6 +14,7 @@ use iceoryx2::port::server::Server;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2::service::port_factory::server::ServerCreateError;
+use iceoryx2::service::Service;
 use std::fmt;
 use std::time::Duration;
 
@@ -49,37 +50,37 @@ impl fmt::Display for ServiceError {
 pub type Received = (u128, Result<(), WireError>);
 
 /// A state stream's publisher: a [`StateHeader`] and the frame's words.
-type StatePublisher = Publisher<ipc::Service, [u64], StateHeader>;
+type StatePublisher<S> = Publisher<S, [u64], StateHeader>;
 
 /// The decimated stream's publisher and its event.
-type Decimated = (StatePublisher, Notifier<ipc::Service>);
+type Decimated<S> = (StatePublisher<S>, Notifier<S>);
 
-pub type Request = ActiveRequest<ipc::Service, ControlRequest, (), ControlResponse, ()>;
-type InputService = iceoryx2::service::port_factory::publish_subscribe::PortFactory<
-    ipc::Service,
-    [u64],
-    InputHeader,
->;
-type ControlService = iceoryx2::service::port_factory::request_response::PortFactory<
-    ipc::Service,
+pub type Request<S = ipc::Service> = ActiveRequest<S, ControlRequest, (), ControlResponse, ()>;
+type InputService<S> =
+    iceoryx2::service::port_factory::publish_subscribe::PortFactory<S, [u64], InputHeader>;
+type ControlService<S> = iceoryx2::service::port_factory::request_response::PortFactory<
+    S,
     ControlRequest,
     (),
     ControlResponse,
     (),
 >;
 
-pub struct Services {
-    pub node: Node<ipc::Service>,
-    pub state: StatePublisher,
-    pub input: Subscriber<ipc::Service, [u64], InputHeader>,
-    pub control: Server<ipc::Service, ControlRequest, (), ControlResponse, ()>,
-    pub state_ready: Notifier<ipc::Service>,
-    pub wake: Listener<ipc::Service>,
+/// The services, on iceoryx2's `ipc` ports for the server;
+/// `cosim-link`'s mirror of them takes `ipc_threadsafe` ports (the same
+/// shared memory, locked for use from Zenoh's threads).
+pub struct Services<S: Service = ipc::Service> {
+    pub node: Node<S>,
+    pub state: StatePublisher<S>,
+    pub input: Subscriber<S, [u64], InputHeader>,
+    pub control: Server<S, ControlRequest, (), ControlResponse, ()>,
+    pub state_ready: Notifier<S>,
+    pub wake: Listener<S>,
     /// The decimated stream, with `--publish-every N`.
-    every: Option<Decimated>,
+    every: Option<Decimated<S>>,
     /// The services whose ports tell who sent an input or a request.
-    input_service: InputService,
-    control_service: ControlService,
+    input_service: InputService<S>,
+    control_service: ControlService<S>,
 }
 
 fn name(s: &str) -> Result<ServiceName, ServiceError> {
@@ -96,7 +97,7 @@ fn err(what: String) -> impl FnOnce(&dyn fmt::Debug) -> ServiceError {
     }
 }
 
-impl Services {
+impl<S: Service> Services<S> {
     /// Creates every service of server `server`, whose state frames hold
     /// at most `frame_words` payload words. Stale resources of dead
     /// processes are removed first, so that a server killed without
@@ -105,7 +106,7 @@ impl Services {
         server: &str,
         decimated: bool,
         frame_words: usize,
-    ) -> Result<Services, ServiceError> {
+    ) -> Result<Services<S>, ServiceError> {
         let node_name: NodeName = format!("cosim-server-{server}")
             .as_str()
             .try_into()
@@ -113,7 +114,7 @@ impl Services {
         let node = cosim_client::domain::node()
             .map_err(|e| err("cannot read the domain".into())(&e))?
             .name(&node_name)
-            .create::<ipc::Service>()
+            .create::<S>()
             .map_err(|e| err("cannot create the iceoryx2 node".into())(&e))?;
         let cleaned = node.try_cleanup_dead_nodes();
         if cleaned.cleanups > 0 {
@@ -167,7 +168,7 @@ impl Services {
         // The publisher's memory holds every subscriber's whole buffer of
         // frames of the scene's largest size, allocated once (the static
         // strategy): the buffer shrinks for big scenes (`state_buffer`).
-        let state_stream = |service: String| -> Result<StatePublisher, ServiceError> {
+        let state_stream = |service: String| -> Result<StatePublisher<S>, ServiceError> {
             node.service_builder(&name(&service)?)
                 .publish_subscribe::<[u64]>()
                 .user_header::<StateHeader>()
@@ -301,11 +302,7 @@ impl Services {
         let mut pid = None;
         self.input_service.dynamic_config().list_publishers(|p| {
             if p.publisher_id.value() == publisher {
-                pid = p
-                    .node_id
-                    .pid::<ipc::Service>()
-                    .ok()
-                    .map(|x| x.value() as u64);
+                pid = p.node_id.pid::<S>().ok().map(|x| x.value() as u64);
                 return CallbackProgression::Stop;
             }
             CallbackProgression::Continue
@@ -321,22 +318,18 @@ impl Services {
 
     /// The node that sent control request `req`, read from the control
     /// service's ports rather than from what the request claims.
-    pub fn request_node(&self, req: &Request) -> Option<u128> {
+    pub fn request_node(&self, req: &Request<S>) -> Option<u128> {
         self.request_origin(req).map(|(node, _)| node)
     }
 
     /// The node that sent control request `req` and its process id (from
     /// the node id); `None` when its client port is gone.
-    pub fn request_origin(&self, req: &Request) -> Option<(u128, Option<u64>)> {
+    pub fn request_origin(&self, req: &Request<S>) -> Option<(u128, Option<u64>)> {
         let client = req.origin();
         let mut found = None;
         self.control_service.dynamic_config().list_clients(|c| {
             if c.client_id == client {
-                let pid = c
-                    .node_id
-                    .pid::<ipc::Service>()
-                    .ok()
-                    .map(|x| x.value() as u64);
+                let pid = c.node_id.pid::<S>().ok().map(|x| x.value() as u64);
                 found = Some((c.node_id.value(), pid));
                 return CallbackProgression::Stop;
             }
@@ -362,7 +355,7 @@ impl Services {
     }
 
     /// The next control request.
-    pub fn receive_request(&self) -> Result<Option<Request>, ServiceError> {
+    pub fn receive_request(&self) -> Result<Option<Request<S>>, ServiceError> {
         self.control
             .receive()
             .map_err(|e| err("cannot receive control requests".into())(&e))
@@ -380,7 +373,10 @@ impl Services {
 }
 
 /// The frame's header and words, written straight into the loaned sample.
-fn send(publisher: &StatePublisher, frame: &StateFrame) -> Result<usize, impl fmt::Debug> {
+fn send<S: Service>(
+    publisher: &StatePublisher<S>,
+    frame: &StateFrame,
+) -> Result<usize, impl fmt::Debug> {
     send_words(publisher, frame.header(), frame.words(), |w| {
         frame.encode(w)
     })

@@ -73,8 +73,8 @@ pub(crate) fn f3(w: &[u64]) -> [f64; 3] {
 /// Sends a message of `header` and `len` words that `encode` writes into
 /// the loaned sample (no copy on the way). Fails with
 /// [`SendError::Incomplete`] if `encode` did not write exactly `len` words.
-pub fn send_words<H: core::fmt::Debug + Default + ZeroCopySend>(
-    publisher: &iceoryx2::port::publisher::Publisher<iceoryx2::prelude::ipc::Service, [u64], H>,
+pub fn send_words<S: iceoryx2::service::Service, H: core::fmt::Debug + Default + ZeroCopySend>(
+    publisher: &iceoryx2::port::publisher::Publisher<S, [u64], H>,
     header: H,
     len: usize,
     encode: impl FnOnce(&mut UninitWords<'_>),
