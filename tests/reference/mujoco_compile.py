@@ -5,7 +5,8 @@ with joints, a mocap body or a child of the world, with the bodies welded
 to it without joints), each with its mass, centre of mass and inertia
 about it in the world at qpos0, combined here from MuJoCo's per-body
 values by the parallel axis theorem; and every joint's world anchor,
-axis, range (when limited) and armature. The configuration is qpos0 with each
+axis, range (when limited and limits are on) and armature; the
+gravity and whether contacts act, as <option><flag> leaves them. The configuration is qpos0 with each
 limited hinge or slide coordinate outside its range moved to the nearer
 limit, where the importer starts it (MuJoCo starts it outside and lets the
 limit push it in). Meshes' masses come from their convex hulls
@@ -28,8 +29,20 @@ def compile_file(path):
         mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_CONVEX
     m = spec.compile()
     d = mujoco.MjData(m)
+    # What <option><flag> switches off acts in MuJoCo's step, not its
+    # compiler: the limits, gravity and contacts the step enforces.
+    off = int(m.opt.disableflags)
+    bits = mujoco.mjtDisableBit
+    constraint = off & bits.mjDSBL_CONSTRAINT
+    limited = [bool(m.jnt_limited[j]) and not (constraint or off & bits.mjDSBL_LIMIT) for j in range(m.njnt)]
+    gravity = [0.0, 0.0, 0.0] if off & bits.mjDSBL_GRAVITY else m.opt.gravity.tolist()
+    # Contacts act, and some geom takes part in them (a geom with contype
+    # and conaffinity 0 is visual only, as the importer takes it).
+    contacts = not (constraint or off & bits.mjDSBL_CONTACT) and any(
+        m.geom_contype[g] or m.geom_conaffinity[g] for g in range(m.ngeom)
+    )
     for j in range(m.njnt):
-        if m.jnt_limited[j] and m.jnt_type[j] in (2, 3):
+        if limited[j] and m.jnt_type[j] in (2, 3):
             a = m.jnt_qposadr[j]
             d.qpos[a] = min(max(d.qpos[a], m.jnt_range[j][0]), m.jnt_range[j][1])
     mujoco.mj_kinematics(m, d)
@@ -104,7 +117,7 @@ def compile_file(path):
                 "body": body_name(m.jnt_bodyid[j]),
                 "anchor": d.xanchor[j].tolist(),
                 "axis": d.xaxis[j].tolist(),
-                "range": m.jnt_range[j].tolist() if m.jnt_limited[j] else None,
+                "range": m.jnt_range[j].tolist() if limited[j] else None,
                 "effort": effort.get(j),
                 "armature": float(m.dof_armature[m.jnt_dofadr[j]]),
             }
@@ -134,7 +147,7 @@ def compile_file(path):
             }
         )
     return {"bodies": bodies, "joints": joints, "geoms": geoms, "timestep": m.opt.timestep,
-            "gravity": m.opt.gravity.tolist()}
+            "gravity": gravity, "contacts": contacts}
 
 
 for path in sys.argv[1:]:

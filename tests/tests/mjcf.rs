@@ -276,6 +276,30 @@ fn compare(imported: &Imported, mj: &Value) -> (f64, String, usize, usize) {
             format!("joint {name:?} armature {o} against {armature}"),
         );
     }
+    // What <option><flag> leaves on in MuJoCo's step: its gravity and
+    // time step, and whether anything collides.
+    let gravity = v3(&mj["gravity"]);
+    note(
+        (Vector3::from(scene.sim.gravity) - gravity).norm() / (1.0 + gravity.norm()),
+        1e-9,
+        format!("gravity {:?} against {gravity:?}", scene.sim.gravity),
+    );
+    let dt = mj["timestep"].as_f64().expect("timestep");
+    note(
+        (scene.sim.dt - dt).abs() / dt,
+        1e-9,
+        format!("time step {} against {dt}", scene.sim.dt),
+    );
+    let model = cosim_server::engine::Model::from_scene(scene);
+    let collides = !model.planes.is_empty() || model.bodies.iter().any(|b| !b.shapes.is_empty());
+    let contacts = mj["contacts"].as_bool().expect("contacts");
+    if collides != contacts {
+        note(
+            f64::INFINITY,
+            1e-9,
+            format!("contacts {collides} against MuJoCo's {contacts}"),
+        );
+    }
     (worst.0, worst.1, bodies, joints)
 }
 
@@ -508,10 +532,11 @@ fn the_mjcf_corpus_runs_with_each_solver() {
         "{within} of {} within 1 mm and 1e-4 m with every solver",
         files.len()
     );
-    // Measured: 27 of 33 (joint errors up to 4.4e-4 m in the dog, the
-    // humanoids' hips and the fish's fins, whose several joints chain
-    // small bodies).
-    assert!(within >= 24, "{within} within 1 mm and 1e-4 m");
+    // Measured: 31 of 33 (27 before `<flag>` was honoured: the fish fell
+    // under a gravity MuJoCo switches off); over the bars, the first-order
+    // joint drift of dm_control's humanoid (2.5e-4 m) and of point_mass
+    // under PGS (1.8e-4 m).
+    assert!(within >= 31, "{within} within 1 mm and 1e-4 m");
 }
 
 /// A file's problems are said at once, each with its element and line,
@@ -520,6 +545,7 @@ fn the_mjcf_corpus_runs_with_each_solver() {
 fn an_mjcf_files_problems_are_said_at_once() {
     let text = r#"<mujoco model="bad">
   <compiler angle="gradian"/>
+  <option><flag gravity="off"/></option>
   <worldbody>
     <body name="a" pos="0 0 x">
       <joint name="j" type="twist"/>
@@ -536,11 +562,12 @@ fn an_mjcf_files_problems_are_said_at_once() {
         .to_string();
     for want in [
         "line 2: <compiler>.angle",
-        "line 4: <body name=\"a\">.pos",
-        "line 5: <joint name=\"j\">.type",
-        "line 6: <geom>.size",
-        "line 7: <geom>.class",
-        "line 11: <motor>: joint \"missing\": no such joint",
+        "line 3: <flag>.gravity",
+        "line 5: <body name=\"a\">.pos",
+        "line 6: <joint name=\"j\">.type",
+        "line 7: <geom>.size",
+        "line 8: <geom>.class",
+        "line 12: <motor>: joint \"missing\": no such joint",
     ] {
         assert!(e.contains(want), "{want:?} not in:\n{e}");
     }
@@ -548,6 +575,88 @@ fn an_mjcf_files_problems_are_said_at_once() {
         .expect_err("not MJCF")
         .to_string();
     assert!(e.contains("top element is <mujoco>"), "{e}");
+}
+
+/// `<option><flag>` switches off what MuJoCo's step would leave out
+/// (the corpus's gravity, contacts and limits are checked against
+/// MuJoCo's own above): with `equality`, `frictionloss`, `passive` and
+/// `actuation` disabled, the same model has no coupling, no dry friction,
+/// no spring and no servo; with `constraint`, no limit and no shape that
+/// collides; each flag alone takes only its own part.
+#[test]
+fn an_mjcf_options_flags_switch_off_what_mujoco_leaves_out() {
+    let model = |flags: &str| {
+        format!(
+            r#"<mujoco model="flags">
+  <option gravity="0 0 -9.81">{flags}</option>
+  <worldbody>
+    <geom type="plane" size="1 1 0.1"/>
+    <body name="a" pos="0 0 1">
+      <joint name="ja" type="hinge" axis="0 1 0" range="-1 1" limited="true" stiffness="3" damping="0.5"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02"/>
+    </body>
+    <body name="b" pos="0 1 1">
+      <joint name="jb" type="hinge" axis="0 1 0" frictionloss="0.2"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02"/>
+    </body>
+    <body name="c" pos="0 2 1">
+      <joint name="jc" type="hinge" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02"/>
+    </body>
+  </worldbody>
+  <equality><joint joint1="jc" joint2="jb"/></equality>
+  <actuator><position joint="jc" kp="10"/></actuator>
+</mujoco>"#
+        )
+    };
+    let load = |flags: &str| {
+        mjcf::import(
+            &model(flags),
+            "flags.xml",
+            "flags",
+            None,
+            Options::default(),
+        )
+        .unwrap_or_else(|e| panic!("{flags}: {e}"))
+        .scene
+    };
+    let joint = |s: &cosim_shared::Scene, n: &str| {
+        s.joints
+            .iter()
+            .find(|j| j.name == n)
+            .cloned()
+            .expect("joint")
+    };
+    let shapes = |s: &cosim_shared::Scene| {
+        let m = cosim_server::engine::Model::from_scene(s);
+        m.planes.len() + m.bodies.iter().map(|b| b.shapes.len()).sum::<usize>()
+    };
+    let all = load("");
+    assert_eq!(all.sim.gravity, [0.0, 0.0, -9.81]);
+    assert!(joint(&all, "ja").range.is_some() && joint(&all, "ja").motor.is_some());
+    assert!(joint(&all, "jb").motor.is_some(), "dry friction");
+    assert!(joint(&all, "jc").mimic.is_some() && joint(&all, "jc").motor.is_some());
+    assert_eq!(shapes(&all), 4);
+    let off = load(
+        r#"<flag gravity="disable" equality="disable" frictionloss="disable" passive="disable" actuation="disable"/>"#,
+    );
+    assert_eq!(off.sim.gravity, [0.0; 3]);
+    assert!(joint(&off, "ja").motor.is_none(), "the spring and damper");
+    assert!(joint(&off, "ja").range.is_some(), "limits stay on");
+    assert!(joint(&off, "jb").motor.is_none(), "the dry friction");
+    let jc = joint(&off, "jc");
+    assert!(jc.mimic.is_none() && jc.motor.is_none(), "{jc:?}");
+    assert_eq!(shapes(&off), 4, "contacts stay on");
+    let constraint = load(r#"<flag constraint="disable"/>"#);
+    assert!(joint(&constraint, "ja").range.is_none());
+    assert!(joint(&constraint, "jb").motor.is_none(), "the dry friction");
+    assert!(joint(&constraint, "jc").mimic.is_none());
+    assert!(joint(&constraint, "ja").motor.is_some(), "the spring stays");
+    assert_eq!(shapes(&constraint), 0);
+    assert_eq!(constraint.sim.gravity, [0.0, 0.0, -9.81]);
+    let contact = load(r#"<flag contact="disable"/>"#);
+    assert_eq!(shapes(&contact), 0);
+    assert!(joint(&contact, "ja").range.is_some());
 }
 
 /// A scene places an MJCF model (gymnasium's ant) as it places a URDF: its

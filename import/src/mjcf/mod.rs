@@ -5,7 +5,9 @@
 //! - `<include>`s, `<default>` classes (`class`, `childclass`, `main`),
 //!   the compiler's `angle`, `eulerseq`, `inertiafromgeom`,
 //!   `inertiagrouprange`, `boundmass`, `boundinertia`, `settotalmass`,
-//!   `meshdir` and `autolimits`; `<option>`'s `timestep` and `gravity`;
+//!   `meshdir` and `autolimits`; `<option>`'s `timestep` and `gravity`,
+//!   and its `<flag>`s that switch off gravity, contacts, limits,
+//!   equalities, friction loss, springs and dampers, or actuators;
 //! - masses as MuJoCo makes them (`mass.rs`): each geom's from its volume
 //!   and density or its `mass`, a body's from its geoms in the inertia
 //!   groups or its `<inertial>`; bodies with no joint are welded to their

@@ -351,6 +351,11 @@ pub fn model(tree: &Tree, problems: &mut Problems) -> Model {
             });
         }
     }
+    for o in root.all("option") {
+        for f in o.all("flag") {
+            r.flags(f, &mut m);
+        }
+    }
     m
 }
 
@@ -442,6 +447,73 @@ impl Reader<'_> {
                     format!("= {other:?}: true, false or auto expected"),
                 );
                 None
+            }
+        }
+    }
+
+    /// `<option><flag>`: what MuJoCo's `disableflags` switch off, done
+    /// to the model as its compiler and step do: `gravity` (no gravity),
+    /// `contact` (no geom collides), `limit`, `equality`, `frictionloss`,
+    /// `passive` (no joint spring or damper), `actuation` (no actuator),
+    /// and `constraint` (contacts, limits, equalities and friction loss at
+    /// once). The solver's own flags (`warmstart`, `energy`, ...) change
+    /// nothing here.
+    fn flags(&mut self, f: &El, m: &mut Model) {
+        for name in [
+            "gravity",
+            "contact",
+            "constraint",
+            "limit",
+            "equality",
+            "frictionloss",
+            "passive",
+            "actuation",
+        ] {
+            match f.attr(name) {
+                None | Some("enable") => continue,
+                Some("disable") => {}
+                Some(other) => {
+                    self.problems.add(
+                        self.tree.line(f),
+                        format!("{}.{name}", self.tree.label(f)),
+                        format!("= {other:?}: enable or disable expected"),
+                    );
+                    continue;
+                }
+            }
+            let constraint = name == "constraint";
+            if name == "gravity" {
+                m.gravity = [0.0; 3];
+            }
+            if constraint || name == "contact" {
+                for g in m.bodies.iter_mut().flat_map(|b| b.geoms.iter_mut()) {
+                    g.contype = 0;
+                    g.conaffinity = 0;
+                }
+            }
+            let joints = |m: &mut Model, f: fn(&mut Joint)| {
+                m.bodies
+                    .iter_mut()
+                    .flat_map(|b| b.joints.iter_mut())
+                    .for_each(f)
+            };
+            if constraint || name == "limit" {
+                joints(m, |j| j.range = None);
+            }
+            if constraint || name == "frictionloss" {
+                joints(m, |j| j.frictionloss = 0.0);
+            }
+            if name == "passive" {
+                joints(m, |j| {
+                    j.stiffness = 0.0;
+                    j.damping = 0.0;
+                });
+            }
+            if constraint || name == "equality" {
+                m.equalities.clear();
+            }
+            if name == "actuation" {
+                m.actuators.clear();
             }
         }
     }
