@@ -197,6 +197,92 @@ fn a_capsule_meets_a_cylinders_true_surface() {
     }
 }
 
+/// A box's edge meets the true surface too (issue 45, point 2): pressed
+/// (zero gravity) against a post's side between two of the prism's
+/// corners, with a vertical edge first, then a level edge across the
+/// post, it stops with its centre `r + a sqrt 2` from the post's axis (a
+/// cube of half side `a` turned 45 degrees about that edge); the prism
+/// stopped it up to r (1 - cos(pi / 32)) = 4.8e-4 m nearer. The box's
+/// corner on the post's end keeps the flat end's exact height.
+#[test]
+fn a_boxs_edge_meets_a_cylinders_true_surface() {
+    use nalgebra::{Matrix3, Rotation3};
+    let (r, l, a) = (0.1, 0.2, 0.03);
+    let t = 0.5 * std::f64::consts::TAU / 32.0;
+    let dir = Vector3::new(t.cos(), t.sin(), 0.0);
+    let across = Vector3::z().cross(&dir);
+    // The vertical edge at the cube's local (a, a) towards the post.
+    let upright = UnitQuaternion::from_axis_angle(
+        &Vector3::z_axis(),
+        t + std::f64::consts::PI - std::f64::consts::FRAC_PI_4,
+    );
+    // The level edge along `across`: local x to `across`, local
+    // (0, 1, 1) / sqrt 2 to `-dir`.
+    let w = across.cross(&-dir);
+    let (ey, ez) = ((-dir - w) / 2f64.sqrt(), (-dir + w) / 2f64.sqrt());
+    let crossing = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(
+        Matrix3::from_columns(&[across, ey, ez]),
+    ));
+    for (what, q) in [("upright", upright), ("crossing", crossing)] {
+        let edge = q * Vector3::new(a, a, 0.0);
+        let edge = if what == "upright" {
+            edge
+        } else {
+            q * Vector3::new(0.0, a, a)
+        };
+        assert!(
+            (edge.normalize() + dir).norm() < 1e-12,
+            "{what}: the edge faces the post"
+        );
+        let start = dir * (r + a * 2f64.sqrt() + 0.01);
+        let s = sim(1e-3, 300, [0.0; 3])
+            + &standing("post", (r, l), 0.0)
+            + &cuboid(
+                "block",
+                [a; 3],
+                1.0,
+                start.into(),
+                [q.w, q.i, q.j, q.k],
+                (-dir * 0.1).into(),
+                [0.0; 3],
+                0.0,
+            );
+        let mut e = engine(&s);
+        let mut closest = f64::INFINITY;
+        run(&mut e, 300, |e, r| {
+            assert!(r.error.is_none(), "{what}: {:?}", r.error);
+            let s = e.state();
+            closest = closest.min((s.bodies[1].x - s.bodies[0].x).xy().norm());
+        });
+        let want = r + a * 2f64.sqrt();
+        assert!(
+            (closest - want).abs() < 1e-6,
+            "{what}: closest {closest}, {want} wanted"
+        );
+    }
+    // A cube on a standing can's end, turned so that no rim point lies
+    // over its bottom face's outline... its corners on the flat end.
+    let s = sim(1e-3, 1000, [0.0, 0.0, -G])
+        + FLOOR
+        + &standing("can", (r, l), l)
+        + &cuboid(
+            "block",
+            [a; 3],
+            1.0,
+            [0.0, 0.0, 2.0 * l + a],
+            [1.0, 0.0, 0.0, 0.0],
+            [0.0; 3],
+            [0.0; 3],
+            0.5,
+        );
+    let mut e = engine(&s);
+    run(&mut e, 1000, |_, r| {
+        assert!(r.error.is_none(), "{:?}", r.error)
+    });
+    let z = e.state().bodies[1].x.z;
+    assert!((z - (2.0 * l + a)).abs() < 1e-6, "the cube at {z}");
+}
+
 /// A box 0.6 x 0.6 x 0.2 on the floor, its top at z = 0.2: a table.
 fn table() -> String {
     cuboid(

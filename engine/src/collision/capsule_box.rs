@@ -5,7 +5,7 @@ use nalgebra::Vector3;
 
 /// How much nearer (m) than both ends a point inside a capsule's segment
 /// must be to the box to be listed besides them.
-const INTERIOR_NEARER: f64 = 1e-9;
+pub(super) const INTERIOR_NEARER: f64 = 1e-9;
 
 /// A capsule (body A) against a box (B): the ball at each end of the
 /// segment (features 0 and 1) and, where a point inside the segment is

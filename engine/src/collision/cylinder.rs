@@ -1,12 +1,15 @@
 //! A cylinder (about its shape's z axis, radius `r`, flat ends at `+-l`)
 //! against a plane, a ball and a capsule, in closed form (a capsule as
 //! balls along its segment, [`capsule_cylinder`]); against boxes, hulls
-//! and cylinders it is its prism (`model/hull.rs`,
-//! `Hull::cylinder`), as `hull.rs` takes any hull, except where a box's
-//! or hull's face carries it ([`on_face`]): there its rim points on the
-//! face's plane, as on a plane, so that a can standing or lying on a
-//! table's box rests at its true height (the prism's flat sides lie
-//! `r (1 - cos(pi / 32))` inside the cylinder, 0.5 % of the radius).
+//! and cylinders its prism (`model/hull.rs`, `Hull::cylinder`) finds
+//! where they meet, as `hull.rs` takes any hull; against a box or hull
+//! the contacts are then the cylinder's true ones: where a face of the
+//! other carries it ([`on_face`]), its rim points on the face's plane, as
+//! on a plane, so that a can standing or lying on a table's box rests at
+//! its true height; elsewhere ([`on_edges`]) the other's edges and
+//! corners against its true surface (the prism's flat sides lie
+//! `r (1 - cos(pi / 32))` inside the cylinder, 0.5 % of the radius). Two
+//! cylinders stay prisms.
 //!
 //! Against a plane, each end's rim offers four points a quarter turn
 //! apart, the first the rim's lowest (towards the plane: the part of the
@@ -74,17 +77,10 @@ pub fn on_face(
     start: usize,
     out: &mut Vec<Geometry>,
 ) {
-    // The prism's contacts where they stand: within the caller's reach
-    // (the prism was tested `prism_slack` further).
+    // No face of the hull carries the cylinder: its edges and vertices
+    // against the cylinder's true surface.
     let prism = |out: &mut Vec<Geometry>| {
-        let mut k = start;
-        while k < out.len() {
-            if out[k].gap > within {
-                out.remove(k);
-            } else {
-                k += 1;
-            }
-        }
+        on_edges(cylinder_is_a, cylinder, rl, other, hull, within, start, out)
     };
     let Some(first) = out.get(start) else {
         return;
@@ -151,6 +147,89 @@ pub fn on_face(
     };
     for &(feature, p, gap) in &kept[..count] {
         out.push(face_contact((a, pa), (b, pb), &reference, p, gap, feature));
+    }
+}
+
+/// A hull's vertices and edges against a cylinder's true surface, where
+/// the cylinder's prism met the hull (its contacts in `out[start..]`) and
+/// no face of the hull carries the cylinder: a box's edge across or along
+/// the cylinder's side, a corner on it or on its rim. Each vertex within
+/// `within` of the surface, and each edge's nearest interior point where
+/// it is nearer than both ends (the signed distance to a convex body is
+/// convex along a segment), as a ball of radius 0 against the surface
+/// ([`ball_cylinder`]); the eight deepest, numbered in the hull's order
+/// (vertices, then edges). Before, the prism's flat sides, which lie up to
+/// `r (1 - cos(pi / 32))` inside the cylinder, stopped a box's edge short.
+#[allow(clippy::too_many_arguments)]
+fn on_edges(
+    cylinder_is_a: bool,
+    cylinder: &Pose,
+    (r, l): (f64, f64),
+    other: &Pose,
+    hull: &Hull,
+    within: f64,
+    start: usize,
+    out: &mut Vec<Geometry>,
+) {
+    let Some(first) = out.get(start) else {
+        return;
+    };
+    let Counterpart::Body(b) = first.b else {
+        return;
+    };
+    let (hull_body, cylinder_body) = match cylinder_is_a {
+        true => (b, first.a),
+        false => (first.a, b),
+    };
+    out.truncate(start);
+    let distance = |p: &Vector3<f64>| surface(r, l, &cylinder.local(p)).0;
+    // The deepest eight: (gap, place in the hull's order, point).
+    let mut kept = [(0.0, 0usize, Vector3::zeros()); 8];
+    let mut count = 0;
+    let mut keep = |gap: f64, place: usize, p: Vector3<f64>| {
+        if gap > within {
+            return;
+        }
+        if count < kept.len() {
+            kept[count] = (gap, place, p);
+            count += 1;
+        } else if let Some(worst) = (0..kept.len()).max_by(|&x, &y| kept[x].0.total_cmp(&kept[y].0))
+        {
+            if gap < kept[worst].0 {
+                kept[worst] = (gap, place, p);
+            }
+        }
+    };
+    for (i, v) in hull.vertices.iter().enumerate() {
+        let p = other.point(v);
+        keep(distance(&p), i, p);
+    }
+    for (e, edge) in hull.edges.iter().enumerate() {
+        let (p0, p1) = (
+            other.point(&hull.vertices[edge.a]),
+            other.point(&hull.vertices[edge.b]),
+        );
+        let along = |t: f64| distance(&(p0 + (p1 - p0) * t));
+        let t = super::segment::minimise_convex(along);
+        let d = along(t);
+        if d < along(0.0).min(along(1.0)) - super::capsule_box::INTERIOR_NEARER {
+            keep(d, hull.vertices.len() + e, p0 + (p1 - p0) * t);
+        }
+    }
+    let kept = &mut kept[..count];
+    kept.sort_by_key(|k| k.1);
+    for (feature, &(_, _, p)) in kept.iter().enumerate() {
+        let g = ball_cylinder(
+            hull_body,
+            p,
+            0.0,
+            Some(p - other.x),
+            cylinder_body,
+            cylinder,
+            (r, l),
+            feature,
+        );
+        out.push(if cylinder_is_a { g.flipped() } else { g });
     }
 }
 
