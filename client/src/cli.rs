@@ -585,16 +585,20 @@ impl Recorder {
     /// sliders, as `run` writes them.
     fn joint_rows(&mut self, f: &StateFrame) -> std::io::Result<()> {
         let t = f.sim_time;
+        let (num, tn) = (cosim_shared::num, cosim_shared::num(t));
         for (desc, c) in self.scene.joints.iter().zip(&f.joint_coordinates) {
             let kind = desc.kind.as_str();
             if c[0].is_nan() {
-                writeln!(self.joints, "{},{t},{},{kind},,,,", f.step, desc.name)?;
+                writeln!(self.joints, "{},{tn},{},{kind},,,,", f.step, desc.name)?;
                 continue;
             }
             writeln!(
                 self.joints,
-                "{},{t},{},{kind},{},{},,",
-                f.step, desc.name, c[0], c[1]
+                "{},{tn},{},{kind},{},{},,",
+                f.step,
+                desc.name,
+                num(c[0]),
+                num(c[1])
             )?;
             if let Some((rec, ..)) = self.mcap.as_mut() {
                 let msg = draw::joint_coordinate(c[0], c[1]);
@@ -645,10 +649,13 @@ impl Recorder {
         }
         self.last_step = Some(f.step);
         let t = f.sim_time;
+        // Numbers as the server writes them (`cosim_shared::num`), so that
+        // a recording and the server's own files are the same text.
+        let (num, tn) = (cosim_shared::num, cosim_shared::num(t));
         let h = if f.dt > 0.0 { f.dt } else { 1.0 };
         self.mcap_state(f).map_err(std::io::Error::other)?;
         for (b, desc) in f.bodies().iter().zip(&self.scene.bodies) {
-            write!(self.states, "{},{t},{}", f.step, desc.name)?;
+            write!(self.states, "{},{tn},{}", f.step, desc.name)?;
             for v in b
                 .position
                 .iter()
@@ -656,7 +663,7 @@ impl Recorder {
                 .chain(&b.linear_velocity)
                 .chain(&b.angular_velocity)
             {
-                write!(self.states, ",{v}")?;
+                write!(self.states, ",{}", num(*v))?;
             }
             writeln!(self.states)?;
         }
@@ -671,8 +678,14 @@ impl Recorder {
             if p.iter().any(|x| *x != 0.0) {
                 writeln!(
                     self.impulses,
-                    "{},{t},joint,{},{},{},{},{},{}",
-                    f.step, joint.name, joint.body_a, joint.body_b, p[0], p[1], p[2]
+                    "{},{tn},joint,{},{},{},{},{},{}",
+                    f.step,
+                    joint.name,
+                    joint.body_a,
+                    joint.body_b,
+                    num(p[0]),
+                    num(p[1]),
+                    num(p[2])
                 )?;
                 let name = joint.name.clone();
                 self.mcap_force("joint", &name, t, h, *p)
@@ -697,8 +710,11 @@ impl Recorder {
                 if p.iter().any(|x| *x != 0.0) {
                     writeln!(
                         self.impulses,
-                        "{},{t},{kind},{label},{a},{b},{},{},{}",
-                        f.step, p[0], p[1], p[2]
+                        "{},{tn},{kind},{label},{a},{b},{},{},{}",
+                        f.step,
+                        num(p[0]),
+                        num(p[1]),
+                        num(p[2])
                     )?;
                     forces.push((kind, label.clone(), p));
                 }
@@ -710,10 +726,10 @@ impl Recorder {
         }
         writeln!(
             self.steps,
-            "{},{t},{},{},{},{}",
+            "{},{tn},{},{},{},{}",
             f.step,
             if f.solver_status == 0 { "ok" } else { "failed" },
-            f.residual,
+            num(f.residual),
             f.lcp_size,
             f.contact_count
         )

@@ -419,20 +419,13 @@ fn a_remote_recorder_gets_the_scene_and_every_frame() {
         scene(&served) == scene(&recorded),
         "the scene came across changed"
     );
-    // Field by field as numbers: the recorder writes 1.3e-5 where the
-    // server writes 0.000013 (the same f64).
-    let states = |d: &Path| -> Vec<Vec<String>> {
+    // Byte for byte: the recorder writes numbers as the server does
+    // (`cosim_shared::num`).
+    let states = |d: &Path| -> Vec<String> {
         std::fs::read_to_string(d.join("states.csv"))
             .expect("states.csv")
             .lines()
-            .map(|l| {
-                l.split(',')
-                    .map(|f| match f.parse::<f64>() {
-                        Ok(x) => format!("{:e}", x),
-                        Err(_) => f.to_string(),
-                    })
-                    .collect()
-            })
+            .map(str::to_string)
             .collect()
     };
     let (a, b) = (states(&served), states(&recorded));

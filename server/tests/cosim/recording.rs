@@ -36,6 +36,12 @@ fn a_recording_matches_the_servers_own_files_and_plots() {
     let ours = positions(dir.path(), "lower");
     let theirs = positions(rec.path(), "lower");
     assert_eq!(ours, theirs, "the recording holds the server's states");
+    // The same text, number for number as the server writes it.
+    let text = |d: &Path| std::fs::read_to_string(d.join("states.csv")).expect("states.csv");
+    assert!(
+        text(dir.path()) == text(rec.path()),
+        "states.csv differs from the server's"
+    );
     // joints.csv too, but for the errors the frames do not carry.
     let joints = |d: &Path| -> Vec<String> {
         let text = std::fs::read_to_string(d.join("joints.csv")).expect("joints.csv");
