@@ -283,6 +283,74 @@ fn a_boxs_edge_meets_a_cylinders_true_surface() {
     assert!((z - (2.0 * l + a)).abs() < 1e-6, "the cube at {z}");
 }
 
+/// Two cylinders' round sides meet at their true radii (issue 45, point
+/// 2): a can pressed (zero gravity) against a post between two of the
+/// prisms' corners, crossed (lying across) and side by side (upright, on
+/// two points: the ends of the sides' overlap), stops with its axis
+/// `r + r2` from the post's (the prisms: up to 4.8e-4 + 2.4e-4 m nearer);
+/// a can stacked on another's end still rests on its rim at `2 l + l2`,
+/// also when started sunk 50 um into it.
+#[test]
+fn two_cylinders_meet_at_their_true_sides() {
+    let (r, l, r2, l2) = (0.1, 0.2, 0.05, 0.08);
+    let t = 0.5 * std::f64::consts::TAU / 32.0;
+    let dir = Vector3::new(t.cos(), t.sin(), 0.0);
+    let across = Vector3::z().cross(&dir);
+    let lying = UnitQuaternion::rotation_between(&Vector3::z(), &across).expect("a turn");
+    for (what, q) in [
+        ("crossed", lying),
+        ("side by side", UnitQuaternion::identity()),
+    ] {
+        let start = dir * (r + r2 + 0.01);
+        let s = sim(1e-3, 300, [0.0; 3])
+            + &standing("post", (r, l), 0.0)
+            + &cylinder(
+                "can",
+                (r2, l2),
+                start.into(),
+                [q.w, q.i, q.j, q.k],
+                ((-dir * 0.1).into(), [0.0; 3]),
+            );
+        let mut e = engine(&s);
+        let (mut closest, mut points) = (f64::INFINITY, 0);
+        run(&mut e, 300, |e, r| {
+            assert!(r.error.is_none(), "{what}: {:?}", r.error);
+            let s = e.state();
+            closest = closest.min((s.bodies[1].x - s.bodies[0].x).xy().norm());
+            points = points.max(
+                e.impulses()
+                    .iter()
+                    .filter(|i| i.kind == ImpulseKind::Normal)
+                    .count(),
+            );
+        });
+        assert!(
+            (closest - (r + r2)).abs() < 1e-6,
+            "{what}: closest {closest}, {} wanted",
+            r + r2
+        );
+        let want = if what == "crossed" { 1 } else { 2 };
+        assert_eq!(points, want, "{what}: touching on {points} points");
+    }
+    // Started on the end, and sunk 50 um into it (its axis then inside
+    // the other's span: the sides must not be taken for the contact).
+    for sunk in [0.0, 5e-5] {
+        let s = sim(1e-3, 1000, [0.0, 0.0, -G])
+            + FLOOR
+            + &standing("can", (r, l), l)
+            + &standing("top", (r2, l2), 2.0 * l + l2 - sunk);
+        let mut e = engine(&s);
+        run(&mut e, 1000, |_, r| {
+            assert!(r.error.is_none(), "{:?}", r.error)
+        });
+        let z = e.state().bodies[1].x.z;
+        assert!(
+            (z - (2.0 * l + l2)).abs() < 1e-6,
+            "sunk {sunk}: the top can at {z}"
+        );
+    }
+}
+
 /// A box 0.6 x 0.6 x 0.2 on the floor, its top at z = 0.2: a table.
 fn table() -> String {
     cuboid(

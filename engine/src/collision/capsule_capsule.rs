@@ -4,7 +4,7 @@ use super::Geometry;
 
 /// Segments closer to parallel than this (the sine of their angle) touch
 /// along an overlap, listed as its two ends.
-const PARALLEL_SINE: f64 = 1e-3;
+pub(super) const PARALLEL_SINE: f64 = 1e-3;
 
 /// Two capsules (bodies A and B): the balls about the nearest points of
 /// their segments (feature 0). Segments within [`PARALLEL_SINE`] of

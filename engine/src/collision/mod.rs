@@ -406,11 +406,13 @@ fn shape_pair(
         ) => {
             let slack = match (ca, cb) {
                 (Some(rl), None) | (None, Some(rl)) => cylinder::prism_slack(rl),
-                _ => 0.0,
+                (Some(x), Some(y)) => cylinder::prism_slack(x) + cylinder::prism_slack(y),
+                (None, None) => 0.0,
             };
             hull::hull_hull(a, &pa, &hulls[ia], b, &pb, &hulls[ib], within + slack, out);
-            // A cylinder carried by a hull's face rests on its true rim;
-            // two cylinders stay prisms.
+            // A cylinder on a hull: its true rim on a face, or the hull's
+            // edges on its true surface; two cylinders' round sides as
+            // two capsules'.
             match (ca, cb) {
                 (Some(rl), None) => {
                     cylinder::on_face(true, &pa, rl, &pb, &hulls[ib], within, start, out)
@@ -418,7 +420,10 @@ fn shape_pair(
                 (None, Some(rl)) => {
                     cylinder::on_face(false, &pb, rl, &pa, &hulls[ia], within, start, out)
                 }
-                _ => {}
+                (Some(x), Some(y)) => {
+                    cylinder::cylinder_cylinder(a, &pa, x, b, &pb, y, within, start, out)
+                }
+                (None, None) => {}
             }
         }
         // Ordered by rank above.
