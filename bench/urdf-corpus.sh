@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # The robots of example-robot-data (pip, 69 URDFs with their meshes) run
-# as `cosim-server run ROBOT.urdf --floor --steps N` at the defaults: for
-# each, whether it loads (or the first line of why not), the wall time,
-# failed steps, the worst penetration (m) and joint error (m). Writes
-# bench/results/urdf-corpus.md. Usage: bench/urdf-corpus.sh [STEPS]
+# as `cosim-server run ROBOT.urdf --floor --steps N --solver S` with each
+# solver (lemke, pgs, auto: the default), at the defaults otherwise: for
+# each, whether it loads (or the first line of why not), then per solver
+# the wall time, failed steps, the worst penetration (m) and joint error
+# (m). Writes bench/results/urdf-corpus.md.
+# Usage: bench/urdf-corpus.sh [STEPS]   (5000: issue 45's 5 s at h = 1 ms)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-steps=${1:-500}
+steps=${1:-5000}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 robots=$(scripts/robot-data.sh)
@@ -17,24 +19,31 @@ cp target/release/cosim-server "$work/"
 bin=$work/cosim-server
 out=bench/results/urdf-corpus.md
 {
-    echo "# example-robot-data 6.0.0 at the defaults"
+    echo "# example-robot-data 6.0.0 with each solver"
     echo
-    echo "\`bench/urdf-corpus.sh $steps\`: each URDF run with \`--floor --steps $steps\` (h = 1 ms), joints passive, links apart."
+    echo "\`bench/urdf-corpus.sh $steps\`: each URDF run with \`--floor --steps $steps\` (h = 1 ms) and \`--solver lemke|pgs|auto\` (auto is the default), joints passive, links apart. Per solver: wall time (s), failed steps, max penetration (m), max joint error (m)."
     echo
-    echo "| robot | loads and runs | wall (s) | failed steps | max penetration (m) | max joint error (m) |"
-    echo "|---|---|---|---|---|---|"
+    echo "| robot | lemke | pgs | auto |"
+    echo "|---|---|---|---|"
 } > "$out"
 for f in $(find "$robots" -name "*.urdf" | sort); do
     name=$(basename "$f" .urdf)
-    if timeout 300 "$bin" run "$f" --floor --steps "$steps" --out "$work/run" --overwrite --quiet > "$work/err" 2>&1; then
-        python3 - "$work/run/summary.json" "$name" >> "$out" <<'PY'
+    row="| $name |"
+    for solver in lemke pgs auto; do
+        if timeout 600 "$bin" run "$f" --floor --steps "$steps" --solver "$solver" --out "$work/run" --overwrite --quiet > "$work/err" 2>&1; then
+            cell=$(python3 - "$work/run/summary.json" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
-print(f"| {sys.argv[2]} | yes | {d['wall_seconds']:.2f} | {d['failures']} | {d['max_penetration']:.1e} | {d['max_joint_error']:.1e} |")
+print(f"{d['wall_seconds']:.2f} s, {d['failures']} failed, {d['max_penetration']:.1e}, {d['max_joint_error']:.1e}")
 PY
-    else
-        why=$(grep -v '^note' "$work/err" | head -2 | tr '\n|' '  ' | sed "s#$robots/##g" | cut -c1-160)
-        echo "| $name | no: $why | | | | |" >> "$out"
-    fi
+)
+            row="$row $cell |"
+        else
+            why=$(grep -v '^note' "$work/err" | head -2 | tr '\n|' '  ' | sed "s#$robots/##g" | cut -c1-120)
+            row="$row no: $why |"
+        fi
+    done
+    echo "$row" >> "$out"
 done
+{ echo; python3 bench/corpus_summary.py "$out"; } >> "$out"
 echo "wrote $out"
