@@ -162,6 +162,57 @@ fn a_hull_against_a_plane_lists_its_lowest_vertices() {
     assert!(out.len() <= 4 && !out.is_empty());
 }
 
+/// A sole that bulges (a vertex 1.9 mm below its four corners, as Talos's
+/// foot mesh in example-robot-data has one), tilted so that two corners
+/// are its lowest and the bulge just above the floor, and rocked back
+/// about them at 8 rad/s: the bulge, inside the four corners kept of the
+/// band, is a contact of its own (a feature past the four), and the step
+/// leaves nothing of the sole under the floor. Without it the bulge went
+/// 0.27 mm in at the first step (1.35 mm on Talos, the corpus's worst).
+#[test]
+fn a_bulging_sole_rocked_on_its_corners_does_not_sink_its_bulge() {
+    // Tall enough that all four corners lie in the band of the lowest
+    // that the plane's contacts are chosen from (2 % of the hull's bound).
+    let mut sole: Vec<[f64; 3]> = corners([0.1, 0.05, 0.1])
+        .into_iter()
+        .map(|[x, y, z]| [x, y, z.max(-0.05)])
+        .collect();
+    let bulge = [-0.04, 0.0, -0.0519];
+    sole.push(bulge);
+    // Tilted about y so that the corners at x = +0.1 lie 6e-5 m below
+    // the bulge: tan phi = (0.0019 + 6e-5 / cos) / 0.14.
+    let phi = ((0.0019 + 6e-5) / 0.14f64).atan();
+    let q = UnitQuaternion::from_euler_angles(0.0, phi, 0.0);
+    let low = |p: [f64; 3]| (q * Vector3::from(p)).z;
+    let z = -low([0.1, 0.05, -0.05]);
+    assert!(
+        low(bulge) - low([0.1, 0.05, -0.05]) > 5e-5,
+        "the corners lowest"
+    );
+    let body = hull_body("sole", &sole, 1.0, [0.0, 0.0, z], quat(&q)).replace(
+        "friction = 0.8\n",
+        "friction = 0.8\nangular_velocity = [0.0, -8.0, 0.0]\n",
+    );
+    let mut e = engine(&(sim(1e-3, 1, [0.0, 0.0, -9.81]) + &body + FLOOR));
+    let mut out = Vec::new();
+    body_plane(e.model(), e.state(), 0, 0, f64::INFINITY, &mut out);
+    let bulge_gap = low(bulge) + z;
+    assert!(
+        out.iter().any(|g| (g.gap - bulge_gap).abs() < 1e-12),
+        "the bulge is listed: {out:?}"
+    );
+    for _ in 0..3 {
+        let r = e.step();
+        assert!(r.ok(), "{:?}", r.error);
+        assert!(
+            r.max_penetration < 1e-5,
+            "penetration {} m after step {}",
+            r.max_penetration,
+            r.step
+        );
+    }
+}
+
 /// Runs `steps` steps and returns the engine; every step must succeed.
 fn settle(text: &str, steps: u64) -> Engine {
     let mut e = engine(text);
