@@ -9,6 +9,7 @@
 # Usage: bench/mjcf-corpus.sh [SECONDS]
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source bench/corpus_cell.sh
 seconds=${1:-5}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -34,19 +35,11 @@ for f in "$data"/dm_control/suite/*.xml "$data"/gymnasium/envs/mujoco/assets/*.x
     row="| $name |"
     h=""
     for solver in lemke pgs auto; do
-        if timeout 600 "$bin" run "$f" --solver "$solver" --duration "$seconds" --out "$work/run" --overwrite --quiet > "$work/err" 2>&1; then
-            cell=$(python3 - "$work/run/summary.json" <<'PY'
-import json, sys
-d = json.load(open(sys.argv[1]))
-print(f"{d['wall_seconds']:.2f} s, {d['failures']} failed, {d['max_penetration']:.1e}, {d['max_joint_error']:.1e}")
-PY
-)
+        cell=$(corpus_cell "$work" "$data" "$bin" run "$f" --solver "$solver" --duration "$seconds")
+        if [[ $cell != no:* ]]; then
             h=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['dt'])" "$work/run/summary.json" 2>/dev/null || echo "")
-            row="$row $cell |"
-        else
-            why=$(grep -v '^note' "$work/err" | head -2 | tr '\n|' '  ' | sed "s#$data/##g" | cut -c1-120)
-            row="$row no: $why |"
         fi
+        row="$row $cell |"
     done
     echo "${row/| $name |/| $name | $h |}" >> "$out"
 done

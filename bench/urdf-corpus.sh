@@ -8,6 +8,7 @@
 # Usage: bench/urdf-corpus.sh [STEPS]   (5000: issue 45's 5 s at h = 1 ms)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source bench/corpus_cell.sh
 steps=${1:-5000}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -30,18 +31,8 @@ for f in $(find "$robots" -name "*.urdf" | sort); do
     name=$(basename "$f" .urdf)
     row="| $name |"
     for solver in lemke pgs auto; do
-        if timeout 600 "$bin" run "$f" --floor --steps "$steps" --solver "$solver" --out "$work/run" --overwrite --quiet > "$work/err" 2>&1; then
-            cell=$(python3 - "$work/run/summary.json" <<'PY'
-import json, sys
-d = json.load(open(sys.argv[1]))
-print(f"{d['wall_seconds']:.2f} s, {d['failures']} failed, {d['max_penetration']:.1e}, {d['max_joint_error']:.1e}")
-PY
-)
-            row="$row $cell |"
-        else
-            why=$(grep -v '^note' "$work/err" | head -2 | tr '\n|' '  ' | sed "s#$robots/##g" | cut -c1-120)
-            row="$row no: $why |"
-        fi
+        cell=$(corpus_cell "$work" "$robots" "$bin" run "$f" --floor --steps "$steps" --solver "$solver")
+        row="$row $cell |"
     done
     echo "$row" >> "$out"
 done

@@ -168,14 +168,12 @@ fn below_rim(
         return;
     }
     // Coordinates across the plane (u, v) and the height along n.
-    let u1 = match n.x.abs() < 0.9 {
-        true => n.cross(&Vector3::x()).normalize(),
-        false => n.cross(&Vector3::y()).normalize(),
-    };
+    let u1 = crate::model::kinematics::perpendicular(n);
     let u2 = n.cross(&u1);
     let flat = |p: &Vector3<f64>| (p.dot(&u1), p.dot(&u2), p.dot(n));
     let k = |i: usize| flat(&near[kept[i]]);
-    // The height over (x, y) of triangle (a, b, c), if (x, y) is within it.
+    // The height over (x, y) of the plane of triangle (a, b, c), and
+    // whether (x, y) is within the triangle; `None` if it stands on edge.
     let over = |t: [usize; 3], x: f64, y: f64| {
         let [a, b, c] = t.map(k);
         let det = (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1);
@@ -185,19 +183,7 @@ fn below_rim(
         let l1 = ((x - a.0) * (c.1 - a.1) - (c.0 - a.0) * (y - a.1)) / det;
         let l2 = ((b.0 - a.0) * (y - a.1) - (x - a.0) * (b.1 - a.1)) / det;
         let inside = l1 >= -1e-12 && l2 >= -1e-12 && l1 + l2 <= 1.0 + 1e-12;
-        inside.then_some(a.2 + l1 * (b.2 - a.2) + l2 * (c.2 - a.2))
-    };
-    let plane = |x: f64, y: f64| {
-        let [a, b, c] = [0, 1, 2].map(k);
-        let d = (b.0 - a.0, b.1 - a.1, b.2 - a.2);
-        let e = (c.0 - a.0, c.1 - a.1, c.2 - a.2);
-        let nz = d.0 * e.1 - d.1 * e.0;
-        if nz.abs() <= 1e-18 {
-            return f64::INFINITY;
-        }
-        let nx = d.1 * e.2 - d.2 * e.1;
-        let ny = d.2 * e.0 - d.0 * e.2;
-        a.2 - (nx * (x - a.0) + ny * (y - a.1)) / nz
+        Some((inside, a.2 + l1 * (b.2 - a.2) + l2 * (c.2 - a.2)))
     };
     let triangles: &[[usize; 3]] = match kept.len() {
         3 => &[[0, 1, 2]],
@@ -212,9 +198,9 @@ fn below_rim(
         let (x, y, z) = flat(p);
         let lowest = triangles
             .iter()
-            .filter_map(|&t| over(t, x, y))
+            .filter_map(|&t| over(t, x, y).filter(|o| o.0).map(|o| o.1))
             .reduce(f64::min)
-            .unwrap_or_else(|| plane(x, y));
+            .unwrap_or_else(|| over([0, 1, 2], x, y).map_or(f64::INFINITY, |o| o.1));
         let depth = z - lowest;
         if depth < -BELOW {
             found[count] = (depth, index[i]);
